@@ -1,0 +1,12 @@
+"""The suite: importing this module registers every benchmark in ``harness.REGISTRY``.
+
+To add a benchmark, write its probe function(s) and one summarising function in a
+module of this package (see ``rig_core.py``), decorate them with
+``@probe(...)`` / ``@benchmark(...)`` from :mod:`benchmarks.harness`, and import the
+module here.
+"""
+
+from . import rotorpy_reference, rig_core  # noqa: F401  (registration side effects)
+from .harness import REGISTRY
+
+__all__ = ["REGISTRY"]

@@ -1,0 +1,167 @@
+"""Frame conversions between the rig's world (paper) frame and MAVLink's NED/FRD frames.
+
+Implements docs/CONVENTIONS.md "Frames":
+
+* World W is ENU (X east, Y north, Z up); MAVLink's local frame is NED. The two differ by
+  the permutation ``T_NED_ENU`` (x_N = y_E, y_N = x_E, z_N = -z_E), which is its own inverse.
+* Body B is FRD (x forward, y right, z down), Eq. 2:
+  ``R_WB = Rz(psi) Ry(theta) Rx(phi) diag(1, -1, -1)``. MAVLink's body frame is also FRD, so
+  the attitude MAVLink reports is ``R_NED_FRD = T_NED_ENU @ R_WB``.
+* MAVLink's Euler angles (ATTITUDE) are the Z-Y-X angles of ``R_NED_FRD``:
+  ``R_NED_FRD = Rz(yaw) Ry(pitch) Rx(roll)``; ATTITUDE_QUATERNION is the same rotation as a
+  unit quaternion (w, x, y, z).
+* Since ``T_NED_ENU = Rx(pi) Rz(-pi/2)`` and conjugation by Rx(pi) flips the sign of y and z
+  rotations, ``R_NED_FRD = Rz(pi/2 - psi) Ry(-theta) Rx(phi)``: roll = phi,
+  pitch = -theta, yaw = pi/2 - psi. Paper psi = 0 (body x east) is MAVLink yaw = +pi/2.
+* Body rates: omega_B is expressed in B, which is FRD like MAVLink's body frame, so the
+  rates (p, q, r) pass unchanged into ATTITUDE.rollspeed/pitchspeed/yawspeed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: ENU -> NED permutation (also NED -> ENU: it is an involution).
+T_NED_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+#: diag(1, -1, -1): FLU body axes -> FRD body axes (Eq. 2).
+D_FLU_FRD = np.diag([1.0, -1.0, -1.0])
+
+
+def _vectors(v) -> np.ndarray:
+    arr = np.asarray(v, dtype=float)
+    if arr.ndim == 0 or arr.shape[-1] != 3:
+        raise ValueError(f"expected vectors of shape (3,) or (N, 3), got shape {arr.shape}")
+    return arr
+
+
+def enu_to_ned(v) -> np.ndarray:
+    """Vectors in ENU (shape (3,) or (N, 3)) to NED: (e, n, u) -> (n, e, -u)."""
+    arr = _vectors(v)
+    return np.stack([arr[..., 1], arr[..., 0], -arr[..., 2]], axis=-1)
+
+
+def ned_to_enu(v) -> np.ndarray:
+    """Vectors in NED (shape (3,) or (N, 3)) to ENU: (n, e, d) -> (e, n, -d)."""
+    arr = _vectors(v)
+    return np.stack([arr[..., 1], arr[..., 0], -arr[..., 2]], axis=-1)
+
+
+def wrap_pi(angle):
+    """Wrap angles (rad) to [-pi, pi); floats stay floats, arrays stay arrays."""
+    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
+    return float(wrapped) if wrapped.ndim == 0 else wrapped
+
+
+def _rx(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _ry(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _rz(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_zyx(z: float, y: float, x: float) -> np.ndarray:
+    """Rz(z) @ Ry(y) @ Rx(x): the Z-Y-X (yaw, pitch, roll) rotation matrix."""
+    return _rz(z) @ _ry(y) @ _rx(x)
+
+
+def _zyx_angles(r: np.ndarray) -> tuple[float, float, float]:
+    """(x, y, z) angles of R = Rz(z) Ry(y) Rx(x); y in [-pi/2, pi/2], x and z in (-pi, pi]."""
+    x = float(np.arctan2(r[2, 1], r[2, 2]))
+    y = float(-np.arcsin(np.clip(r[2, 0], -1.0, 1.0)))
+    z = float(np.arctan2(r[1, 0], r[0, 0]))
+    return x, y, z
+
+
+def rwb_from_paper_euler(phi: float, theta: float, psi: float) -> np.ndarray:
+    """R_WB = Rz(psi) Ry(theta) Rx(phi) diag(1, -1, -1) (Eq. 2)."""
+    return rotation_zyx(psi, theta, phi) @ D_FLU_FRD
+
+
+def paper_euler_from_rwb(r_wb) -> tuple[float, float, float]:
+    """(phi, theta, psi): Z-Y-X angles of Q = R_WB diag(1, -1, -1) (CONVENTIONS.md)."""
+    return _zyx_angles(np.asarray(r_wb, dtype=float) @ D_FLU_FRD)
+
+
+def rwb_to_r_ned_frd(r_wb) -> np.ndarray:
+    """Attitude in MAVLink terms: R_NED_FRD = T_NED_ENU @ R_WB (B is already FRD)."""
+    return T_NED_ENU @ np.asarray(r_wb, dtype=float)
+
+
+def mavlink_euler_from_rwb(r_wb) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) of MAVLink ATTITUDE: Z-Y-X angles of R_NED_FRD."""
+    return _zyx_angles(rwb_to_r_ned_frd(r_wb))
+
+
+def quaternion_from_rotation(r) -> np.ndarray:
+    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (Shepperd's method)."""
+    r = np.asarray(r, dtype=float)
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    k = int(np.argmax([trace, r[0, 0], r[1, 1], r[2, 2]]))
+    if k == 0:
+        s = 2.0 * np.sqrt(1.0 + trace)
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    elif k == 1:
+        s = 2.0 * np.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+    elif k == 2:
+        s = 2.0 * np.sqrt(1.0 - r[0, 0] + r[1, 1] - r[2, 2])
+        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 - r[0, 0] - r[1, 1] + r[2, 2])
+        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+    q = np.array(q)
+    q /= np.linalg.norm(q)
+    return -q if q[0] < 0.0 else q
+
+
+def mavlink_quaternion_from_rwb(r_wb) -> np.ndarray:
+    """ATTITUDE_QUATERNION (w, x, y, z) of R_NED_FRD, w >= 0."""
+    return quaternion_from_rotation(rwb_to_r_ned_frd(r_wb))
+
+
+def _scalar_or_array(x):
+    arr = np.asarray(x, dtype=float)
+    return float(arr) if arr.ndim == 0 else arr
+
+
+def _swap_convention(a, b, c):
+    """(a, -b, wrap(pi/2 - c)): the map is its own inverse (see the module docstring)."""
+    return (
+        _scalar_or_array(a),
+        _scalar_or_array(-np.asarray(b, dtype=float)),
+        _scalar_or_array(wrap_pi(np.pi / 2.0 - np.asarray(c, dtype=float))),
+    )
+
+
+def paper_euler_to_mavlink(phi, theta, psi):
+    """Paper (phi, theta, psi) -> MAVLink (roll, pitch, yaw) = (phi, -theta, pi/2 - psi).
+
+    Yaw is wrapped to [-pi, pi). Works on scalars (returns floats) and arrays.
+    """
+    return _swap_convention(phi, theta, psi)
+
+
+def mavlink_euler_to_paper(roll, pitch, yaw):
+    """MAVLink (roll, pitch, yaw) -> paper (phi, theta, psi) = (roll, -pitch, pi/2 - yaw).
+
+    Psi is wrapped to [-pi, pi). Works on scalars (returns floats) and arrays.
+    """
+    return _swap_convention(roll, pitch, yaw)
+
+
+def mavlink_body_rates_from_omega_b(omega_b) -> np.ndarray:
+    """(rollspeed, pitchspeed, yawspeed) from omega_B: identical, both frames are FRD."""
+    return _vectors(omega_b).copy()
+
+
+def omega_b_from_mavlink_body_rates(rates) -> np.ndarray:
+    """omega_B from MAVLink (rollspeed, pitchspeed, yawspeed): identical, both are FRD."""
+    return _vectors(rates).copy()

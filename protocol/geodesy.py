@@ -1,0 +1,127 @@
+"""Local metres <-> geodetic latitude/longitude/altitude about a home point (WGS-84).
+
+Implements the local tangent plane at ``home``: geodetic -> ECEF (closed form),
+ECEF -> geodetic (Bowring's fixed-point iteration in the pole-safe form
+lat = atan2(z + e^2 N sin(lat), p), h = p cos(lat) + (z + e^2 N sin(lat)) sin(lat) - N,
+iterated to convergence), and ECEF <-> ENU by the rotation with rows
+east = (-sin lon, cos lon, 0), north = (-sin lat cos lon, -sin lat sin lon, cos lat),
+up = (cos lat cos lon, cos lat sin lon, sin lat). NED is ENU permuted (protocol/frames.py).
+Constants: WGS-84 a = 6378137 m, 1/f = 298.257223563 (NIMA TR8350.2).
+
+Altitudes are heights above the WGS-84 ellipsoid. The emulator has no geoid model: a home
+altitude given as AMSL is treated as ellipsoidal, which shifts all points together and
+keeps local <-> global conversions mutually exact.
+
+Every (3,) input gives floats; every (N, 3) input (or arrays of lat/lon/alt) gives arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from protocol.frames import enu_to_ned, ned_to_enu
+
+WGS84_A_M = 6378137.0
+WGS84_F = 1.0 / 298.257223563
+WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
+WGS84_B_M = WGS84_A_M * (1.0 - WGS84_F)
+_MAX_ITERATIONS = 10
+
+
+@dataclass(frozen=True)
+class Home:
+    """Origin of the local frame: geodetic latitude, longitude (deg) and ellipsoidal
+    altitude (m)."""
+
+    lat_deg: float
+    lon_deg: float
+    alt_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (
+            ("lat_deg", -90.0, 90.0),
+            ("lon_deg", -180.0, 180.0),
+            ("alt_m", -math.inf, math.inf),
+        ):
+            value = getattr(self, name)
+            if not (_is_real(value) and math.isfinite(value) and lo <= value <= hi):
+                what = f"a number in [{lo:g}, {hi:g}]" if math.isfinite(lo) else "a finite number"
+                raise ValueError(f"Home.{name} must be {what}, got {value!r}")
+
+
+def _is_real(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def _out(x: np.ndarray):
+    return float(x) if np.ndim(x) == 0 else x
+
+
+def geodetic_to_ecef(lat_deg, lon_deg, alt_m) -> np.ndarray:
+    """ECEF position(s) (m), shape (..., 3), of geodetic lat/lon (deg) and height (m)."""
+    lat = np.radians(np.asarray(lat_deg, dtype=float))
+    lon = np.radians(np.asarray(lon_deg, dtype=float))
+    h = np.asarray(alt_m, dtype=float)
+    sin_lat = np.sin(lat)
+    n = WGS84_A_M / np.sqrt(1.0 - WGS84_E2 * sin_lat * sin_lat)
+    x = (n + h) * np.cos(lat) * np.cos(lon)
+    y = (n + h) * np.cos(lat) * np.sin(lon)
+    z = (n * (1.0 - WGS84_E2) + h) * sin_lat
+    return np.stack(np.broadcast_arrays(x, y, z), axis=-1)
+
+
+def ecef_to_geodetic(ecef):
+    """(lat_deg, lon_deg, alt_m) of ECEF position(s) (m), shape (3,) or (N, 3)."""
+    p_ecef = np.asarray(ecef, dtype=float)
+    x, y, z = p_ecef[..., 0], p_ecef[..., 1], p_ecef[..., 2]
+    p = np.hypot(x, y)
+    lat = np.arctan2(z, p * (1.0 - WGS84_E2))
+    for _ in range(_MAX_ITERATIONS):
+        sin_lat = np.sin(lat)
+        n = WGS84_A_M / np.sqrt(1.0 - WGS84_E2 * sin_lat * sin_lat)
+        new_lat = np.arctan2(z + WGS84_E2 * n * sin_lat, p)
+        converged = np.all(np.abs(new_lat - lat) < 1e-15)
+        lat = new_lat
+        if converged:
+            break
+    sin_lat, cos_lat = np.sin(lat), np.cos(lat)
+    n = WGS84_A_M / np.sqrt(1.0 - WGS84_E2 * sin_lat * sin_lat)
+    h = p * cos_lat + (z + WGS84_E2 * n * sin_lat) * sin_lat - n
+    return _out(np.degrees(lat)), _out(np.degrees(np.arctan2(y, x))), _out(h)
+
+
+def ecef_to_enu_rotation(lat_deg: float, lon_deg: float) -> np.ndarray:
+    """Rotation R_ENU_ECEF at a geodetic point: rows are east, north, up in ECEF."""
+    lat, lon = math.radians(lat_deg), math.radians(lon_deg)
+    sl, cl, so, co = math.sin(lat), math.cos(lat), math.sin(lon), math.cos(lon)
+    return np.array([[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]])
+
+
+def local_enu_to_global(home: Home, enu):
+    """(lat_deg, lon_deg, alt_m) of local ENU offset(s) (m) from ``home``."""
+    enu = np.asarray(enu, dtype=float)
+    r = ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
+    ecef = geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m) + enu @ r
+    return ecef_to_geodetic(ecef)
+
+
+def global_to_local_enu(home: Home, lat_deg, lon_deg, alt_m) -> np.ndarray:
+    """Local ENU offset(s) (m) from ``home`` of geodetic point(s); shape (3,) or (N, 3)."""
+    r = ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
+    delta = geodetic_to_ecef(lat_deg, lon_deg, alt_m) - geodetic_to_ecef(
+        home.lat_deg, home.lon_deg, home.alt_m
+    )
+    return delta @ r.T
+
+
+def local_ned_to_global(home: Home, ned):
+    """(lat_deg, lon_deg, alt_m) of local NED offset(s) (m) from ``home``."""
+    return local_enu_to_global(home, ned_to_enu(ned))
+
+
+def global_to_local_ned(home: Home, lat_deg, lon_deg, alt_m) -> np.ndarray:
+    """Local NED offset(s) (m) from ``home`` of geodetic point(s); shape (3,) or (N, 3)."""
+    return enu_to_ned(global_to_local_enu(home, lat_deg, lon_deg, alt_m))

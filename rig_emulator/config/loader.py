@@ -1,0 +1,201 @@
+"""Load, merge and validate rig parameter files (TOML presets + user files + overrides).
+
+Layers, later ones winning: ``presets/rig.toml`` (every default), an airframe preset
+(``presets/airframes/<name>.toml``, Table 2), a scenario preset
+(``presets/scenarios/<name>.toml``), user TOML files, then dotted-key overrides such as
+``{"smc.switching": "boundary"}``. Every leaf is checked against
+:data:`rig_emulator.config.schema.SCHEMA`; an error names the key, the value and the
+allowed range.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+from rig_emulator.config.schema import SCHEMA, Spec
+
+
+class ConfigError(ValueError):
+    """A parameter is missing, unknown, of the wrong type or out of range."""
+
+
+def _preset_dir(kind: str | None = None):
+    root = resources.files("rig_emulator") / "presets"
+    return root / kind if kind else root
+
+
+def available(kind: str) -> list[str]:
+    """Names of the presets of one kind ('airframes' or 'scenarios')."""
+    return sorted(p.name[:-5] for p in _preset_dir(kind).iterdir() if p.name.endswith(".toml"))
+
+
+def _read_toml(source, label: str) -> dict:
+    try:
+        text = source.read_text(encoding="utf-8")
+    except FileNotFoundError as exc:
+        raise ConfigError(f"{label}: file not found") from exc
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{label}: not valid TOML ({exc})") from exc
+
+
+def _preset(kind: str, name: str) -> dict:
+    path = _preset_dir(kind) / f"{name}.toml"
+    if not path.is_file():
+        raise ConfigError(f"unknown {kind[:-1]} preset {name!r}: choose one of {', '.join(available(kind))}")
+    return _read_toml(path, f"{kind[:-1]} preset {name!r}")
+
+
+def flatten(tree: Mapping, prefix: str = "") -> dict[str, Any]:
+    """Nested tables -> dotted keys. Lists of tables stay whole (they are one parameter)."""
+    out: dict[str, Any] = {}
+    for key, value in tree.items():
+        dotted = f"{prefix}{key}"
+        if isinstance(value, Mapping) and dotted not in SCHEMA:
+            out.update(flatten(value, dotted + "."))
+        else:
+            out[dotted] = value
+    return out
+
+
+def _check_number(key: str, spec: Spec, value: Any, integer: bool) -> float | int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(f"{key} = {value!r}: must be a number {spec.describe_range()}")
+    if integer and (isinstance(value, float) and not value.is_integer()):
+        raise ConfigError(f"{key} = {value!r}: must be an integer {spec.describe_range()}")
+    if not math.isfinite(value):
+        raise ConfigError(f"{key} = {value!r}: must be finite, {spec.describe_range()}")
+    below = value <= spec.lo if spec.lo_open else value < spec.lo
+    if below or value > spec.hi:
+        unit = f" {spec.unit}" if spec.unit else ""
+        raise ConfigError(f"{key} = {value!r}: must be {spec.describe_range()}{unit}")
+    return int(value) if integer else float(value)
+
+
+def check_value(key: str, spec: Spec, value: Any) -> Any:
+    """Validate one value against its spec and return it normalised."""
+    if spec.kind == "float":
+        return _check_number(key, spec, value, integer=False)
+    if spec.kind == "int":
+        return _check_number(key, spec, value, integer=True)
+    if spec.kind == "bool":
+        if not isinstance(value, bool):
+            raise ConfigError(f"{key} = {value!r}: must be true or false")
+        return value
+    if spec.kind == "str":
+        if not isinstance(value, str):
+            raise ConfigError(f"{key} = {value!r}: must be a string")
+        if spec.choices and value not in spec.choices:
+            raise ConfigError(f"{key} = {value!r}: must be {spec.describe_range()}")
+        return value
+    if spec.kind in ("vec3", "floats"):
+        if key == "guidance.waypoints":
+            return _check_waypoints(key, value)
+        if not isinstance(value, list):
+            raise ConfigError(f"{key} = {value!r}: must be a list of numbers")
+        if spec.length is not None and len(value) != spec.length:
+            raise ConfigError(f"{key} = {value!r}: must have exactly {spec.length} numbers")
+        return [_check_number(f"{key}[{i}]", spec, v, integer=False) for i, v in enumerate(value)]
+    if spec.kind == "table_list":
+        if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
+            raise ConfigError(f"{key}: must be a list of tables ([[{key}]] in TOML)")
+        items = []
+        for i, entry in enumerate(value):
+            unknown = set(entry) - set(spec.item)
+            if unknown:
+                raise ConfigError(f"{key}[{i}]: unknown field(s) {sorted(unknown)}; allowed: {sorted(spec.item)}")
+            missing = set(spec.item) - set(entry)
+            if missing:
+                raise ConfigError(f"{key}[{i}]: missing field(s) {sorted(missing)}")
+            items.append({f: check_value(f"{key}[{i}].{f}", s, entry[f]) for f, s in spec.item.items()})
+        return items
+    raise ConfigError(f"{key}: schema kind {spec.kind!r} is not known to the loader")
+
+
+def _check_waypoints(key: str, value: Any) -> list[list[float]]:
+    if not isinstance(value, list) or not all(isinstance(w, list) and len(w) == 3 for w in value):
+        raise ConfigError(f"{key}: must be a list of [x, y, z] triples in metres")
+    spec = Spec("float", "waypoint coordinate", "m", -1e5, 1e5)
+    return [[_check_number(f"{key}[{i}][{j}]", spec, c, integer=False) for j, c in enumerate(w)] for i, w in enumerate(value)]
+
+
+class RigConfig(dict):
+    """Validated parameters as ``{dotted_key: value}`` (SI apart from keys named with their unit)."""
+
+    def with_overrides(self, overrides: Mapping[str, Any]) -> "RigConfig":
+        merged = dict(self)
+        merged.update(overrides)
+        return validate(merged)
+
+    def section(self, prefix: str) -> dict[str, Any]:
+        return {k[len(prefix) + 1 :]: v for k, v in self.items() if k.startswith(prefix + ".")}
+
+
+def _divisor(key: str, rate: float, physics_rate: float) -> None:
+    ratio = physics_rate / rate
+    if abs(ratio - round(ratio)) > 1e-9:
+        raise ConfigError(
+            f"{key} = {rate:g}: must divide sim.physics_rate_hz = {physics_rate:g} into a whole number of steps"
+        )
+
+
+def validate(flat: Mapping[str, Any]) -> RigConfig:
+    """Check every key of a flat config; raise :class:`ConfigError` naming the first bad one."""
+    unknown = [k for k in flat if k not in SCHEMA]
+    if unknown:
+        key = unknown[0]
+        hint = difflib.get_close_matches(key, SCHEMA.keys(), n=1)
+        suffix = f" (did you mean {hint[0]!r}?)" if hint else ""
+        raise ConfigError(f"unknown parameter {key!r}{suffix}")
+    missing = [k for k in SCHEMA if k not in flat]
+    if missing:
+        raise ConfigError(f"missing parameter {missing[0]!r}: {SCHEMA[missing[0]].doc}")
+    out = RigConfig({k: check_value(k, SCHEMA[k], flat[k]) for k in SCHEMA})
+    physics = out["sim.physics_rate_hz"]
+    for key in ("sim.control_rate_hz", "sim.log_rate_hz"):
+        if out[key] > physics:
+            raise ConfigError(f"{key} = {out[key]:g}: must not exceed sim.physics_rate_hz = {physics:g}")
+        _divisor(key, out[key], physics)
+    if out["guidance.type"] == "waypoints" and not out["guidance.waypoints"]:
+        raise ConfigError("guidance.waypoints: guidance.type = 'waypoints' needs at least one waypoint")
+    return out
+
+
+def load_config(
+    airframe: str = "hilms",
+    scenario: str | None = None,
+    files: Iterable[str | Path] = (),
+    overrides: Mapping[str, Any] | None = None,
+) -> RigConfig:
+    """Merge the layers described in the module docstring and validate the result."""
+    flat = flatten(_read_toml(_preset_dir() / "rig.toml", "base preset rig.toml"))
+    flat.update(flatten({"airframe": _preset("airframes", airframe)}))
+    flat["airframe.name"] = airframe
+    if scenario is not None:
+        flat.update(flatten(_preset("scenarios", scenario)))
+    for path in files:
+        flat.update(flatten(_read_toml(Path(path), str(path))))
+    if overrides:
+        flat.update(overrides)
+    return validate(flat)
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """``key=value`` with a TOML value (``smc.switching="boundary"``, ``smc.k=[2,2,2]``).
+
+    A bare word that is not valid TOML is taken as a string, so ``control.strategy=flc`` works.
+    """
+    if "=" not in text:
+        raise ConfigError(f"override {text!r}: expected KEY=VALUE")
+    key, raw = (part.strip() for part in text.split("=", 1))
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key, value

@@ -1,0 +1,169 @@
+"""Every tunable of the rig: name, kind, allowed range, unit and meaning.
+
+The schema is the single source of truth for what a parameter file may contain. The
+TOML presets under ``rig_emulator/presets/`` give values; :mod:`rig_emulator.config.loader`
+checks each value against its :class:`Spec` and names the key and the allowed range when
+one is out of bounds. Keys are dotted paths into the nested TOML tables.
+
+Non-SI paper values keep their unit in the key (``d1_phi_deg``); the loader's
+:func:`~rig_emulator.config.loader.to_si` converts them once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Spec:
+    """One parameter: ``kind`` is float, int, str, bool, vec3, floats or table_list."""
+
+    kind: str
+    doc: str
+    unit: str = ""
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    choices: tuple = ()
+    length: int | None = None
+    item: dict[str, "Spec"] = field(default_factory=dict)
+
+    def describe_range(self) -> str:
+        if self.choices:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        lo = "(" if self.lo_open else "["
+        return f"in {lo}{self.lo:g}, {self.hi:g}]"
+
+
+def F(doc, unit="", lo=-math.inf, hi=math.inf, lo_open=False):
+    return Spec("float", doc, unit, lo, hi, lo_open)
+
+
+def I(doc, lo=-math.inf, hi=math.inf):  # noqa: E743 - short constructor names keep the table readable
+    return Spec("int", doc, "", lo, hi)
+
+
+def S(doc, choices):
+    return Spec("str", doc, choices=tuple(choices))
+
+
+def V3(doc, unit="", lo=-math.inf, hi=math.inf):
+    return Spec("vec3", doc, unit, lo, hi, length=3)
+
+
+def FS(doc, unit="", lo=-math.inf, hi=math.inf, length=None):
+    return Spec("floats", doc, unit, lo, hi, length=length)
+
+
+STRATEGIES = ("smc-flc", "flc", "smc", "pid")
+GUIDANCE_TYPES = ("hover", "attitude", "helix", "waypoints")
+
+SCHEMA: dict[str, Spec] = {
+    # --- simulation ----------------------------------------------------------------
+    "sim.physics_rate_hz": F("physics (RK4) rate", "Hz", 50, 100_000),
+    "sim.control_rate_hz": F("controller rate; an integer divisor of the physics rate", "Hz", 10, 100_000),
+    "sim.log_rate_hz": F("rate of the recorded time series; an integer divisor of the physics rate", "Hz", 1, 100_000),
+    "sim.duration": F("simulated time", "s", 0.0, 1e6, lo_open=True),
+    "sim.seed": I("random seed (sensor noise, turn-on errors, gusts)", 0, 2**63 - 1),
+    "sim.ground": Spec("bool", "virtual ground at Z = 0: the virtual position cannot go below it"),
+    # --- airframe (Table 2) ------------------------------------------------------------
+    "airframe.name": Spec("str", "airframe preset name"),
+    "airframe.mass": F("mass m (Table 2)", "kg", 0.0, 100.0, lo_open=True),
+    "airframe.ixx": F("inertia Ixx (Table 2)", "kg m^2", 0.0, 100.0, lo_open=True),
+    "airframe.iyy": F("inertia Iyy (Table 2)", "kg m^2", 0.0, 100.0, lo_open=True),
+    "airframe.izz": F("inertia Izz (Table 2)", "kg m^2", 0.0, 100.0, lo_open=True),
+    "airframe.arm_length": F("arm length l (Table 2)", "m", 0.0, 10.0, lo_open=True),
+    "airframe.rotor_inertia": F("rotor inertia Jr about its axis (Eq. 3)", "kg m^2", 0.0, 1.0),
+    "airframe.km_over_kf": F("reaction moment per thrust kM/kF (Eq. 38-39)", "m", 0.0, 1.0, lo_open=True),
+    "airframe.gravity": F("gravitational acceleration g", "m/s^2", 0.0, 100.0, lo_open=True),
+    # --- motors (Eq. 40) ---------------------------------------------------------------
+    "motors.thrust_per_volt_grf": F("thrust per volt, Eq. 40 (F = 47.62 V gr.F)", "gr.F/V", 0.0, 1e4, lo_open=True),
+    "motors.voltage_max": F("supply voltage ceiling (Fig. 11)", "V", 0.0, 100.0, lo_open=True),
+    "motors.thrust_ceiling_grf": F("thrust ceiling per motor (Sec. 3-2)", "gr.F", 0.0, 1e5, lo_open=True),
+    "motors.time_constant": F("first-order lag from voltage command to thrust", "s", 0.0, 10.0),
+    "motors.kf": F("rotor thrust coefficient kF, F = kF Omega^2 (Eq. 38)", "N s^2/rad^2", 0.0, 1.0, lo_open=True),
+    # --- control ---------------------------------------------------------------------------
+    "control.strategy": S("controller strategy", STRATEGIES),
+    "control.max_tilt_deg": F("tilt limit of the Eq. 35 singularity guard", "deg", 1.0, 80.0),
+    "control.reference_time_constant": F(
+        "time constant of the filter that gives desired-attitude rates and accelerations", "s", 0.0, 1.0, lo_open=True
+    ),
+    "smc.k": V3("switching gains K (Eq. 9, Eq. 41) for phi, theta, psi", "rad/s^2", 0.0, 1e4),
+    "smc.lam": V3("sliding-surface slopes lambda (Eq. 5, Eq. 41) for phi, theta, psi", "1/s", 0.0, 1e4),
+    "smc.switching": S("switching function: 'sgn' (paper-faithful) or 'boundary' (sat(s/Phi))", ("sgn", "boundary")),
+    "smc.boundary_layer": F("boundary-layer width Phi for 'boundary' switching", "rad/s", 0.0, 100.0, lo_open=True),
+    "smc.position_k": V3("position SMC switching gains (strategy 'smc') for X, Y, Z", "m/s^2", 0.0, 1e3),
+    "smc.position_lam": V3("position SMC surface slopes for X, Y, Z", "1/s", 0.0, 1e3),
+    "smc.position_boundary_layer": F("position SMC boundary layer", "m/s", 0.0, 100.0, lo_open=True),
+    "flc.r": FS("membership ratios r1..r4 (Fig. 5; d0 = r1 d1, d2 = r2 d1, d3 = r3 d1, dt = r4 d1)", "", 0.0, 10.0, 4),
+    "flc.geometry": S("input membership geometry: 'paper' (RIG-SPEC Reading) or 'even'", ("paper", "even")),
+    "flc.d1_phi_deg": F("d1 of roll error (Table 3)", "deg", 0.0, 90.0, lo_open=True),
+    "flc.d1_theta_deg": F("d1 of pitch error (Table 3)", "deg", 0.0, 90.0, lo_open=True),
+    "flc.d1_psi_deg": F("d1 of yaw error (Table 3)", "deg", 0.0, 90.0, lo_open=True),
+    "flc.d1_dphi_deg_s": F("d1 of roll-rate error (Table 3)", "deg/s", 0.0, 1e4, lo_open=True),
+    "flc.d1_dtheta_deg_s": F("d1 of pitch-rate error (Table 3)", "deg/s", 0.0, 1e4, lo_open=True),
+    "flc.d1_dpsi_deg_s": F("d1 of yaw-rate error (Table 3)", "deg/s", 0.0, 1e4, lo_open=True),
+    "flc.d1_u2": F("d1 of output u2 (Table 3)", "N m", 0.0, 1e3, lo_open=True),
+    "flc.d1_u3": F("d1 of output u3 (Table 3)", "N m", 0.0, 1e3, lo_open=True),
+    "flc.d1_u4": F("d1 of output u4 (Table 3)", "N m", 0.0, 1e3, lo_open=True),
+    "flc.d1_x": F("d1 of X error (Table 5)", "m", 0.0, 1e3, lo_open=True),
+    "flc.d1_y": F("d1 of Y error (Table 5)", "m", 0.0, 1e3, lo_open=True),
+    "flc.d1_z": F("d1 of Z error (Table 5)", "m", 0.0, 1e3, lo_open=True),
+    "flc.d1_dx": F("d1 of X-rate error (Table 5)", "m/s", 0.0, 1e3, lo_open=True),
+    "flc.d1_dy": F("d1 of Y-rate error (Table 5)", "m/s", 0.0, 1e3, lo_open=True),
+    "flc.d1_dz": F("d1 of Z-rate error (Table 5)", "m/s", 0.0, 1e3, lo_open=True),
+    "flc.d1_u1": F("d1 of output u1, a correction about hover thrust (Table 5)", "N", 0.0, 1e3, lo_open=True),
+    "flc.d1_ux": F("d1 of virtual input uX (Table 5)", "", 0.0, 1.0, lo_open=True),
+    "flc.d1_uy": F("d1 of virtual input uY (Table 5)", "", 0.0, 1.0, lo_open=True),
+    "pid.attitude_kp": V3("attitude PID proportional gains", "1/s^2", 0.0, 1e5),
+    "pid.attitude_ki": V3("attitude PID integral gains", "1/s^3", 0.0, 1e5),
+    "pid.attitude_kd": V3("attitude PID derivative gains", "1/s", 0.0, 1e5),
+    "pid.position_kp": V3("position PID proportional gains", "1/s^2", 0.0, 1e4),
+    "pid.position_ki": V3("position PID integral gains", "1/s^3", 0.0, 1e4),
+    "pid.position_kd": V3("position PID derivative gains", "1/s", 0.0, 1e4),
+    "pid.integral_limit": F("anti-windup limit of every PID integrator (in the integrated error's unit x s)", "", 0.0, 1e3),
+    # --- guidance ----------------------------------------------------------------------------
+    "guidance.type": S("what the rig follows", GUIDANCE_TYPES),
+    "guidance.hover_position": V3("hover set-point (world ENU)", "m"),
+    "guidance.yaw_deg": F("desired yaw (the paper keeps it 0)", "deg", -180.0, 180.0),
+    "guidance.amplitude_deg": V3("harmonic attitude amplitudes for phi, theta, psi (Eq. 44)", "deg", 0.0, 80.0),
+    "guidance.omega": F("harmonic attitude frequency (Eq. 44)", "rad/s", 0.0, 1e3, lo_open=True),
+    "guidance.waypoints": Spec("floats", "waypoints as [[x, y, z], ...] in world ENU", "m"),
+    "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
+    "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
+    "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
+    # --- initial state -------------------------------------------------------------------------
+    "initial.position": V3("initial virtual position (world ENU)", "m"),
+    "initial.euler_deg": V3("initial phi, theta, psi", "deg", -180.0, 180.0),
+    # --- disturbances ----------------------------------------------------------------------------
+    "disturbance.wind_force": V3("constant wind force on the body (world ENU), enters Eq. 1", "N", -1e3, 1e3),
+    "disturbance.gusts": Spec(
+        "table_list",
+        "1-cosine gusts added to the wind force",
+        item={
+            "t": F("start time", "s", 0.0),
+            "duration": F("gust length", "s", 0.0, 1e4, lo_open=True),
+            "force": V3("peak force (world ENU)", "N", -1e3, 1e3),
+        },
+    ),
+    "disturbance.shocks": Spec(
+        "table_list",
+        "impulsive torque shocks on an arm (Fig. 12): a rectangular push on the arm tip",
+        item={
+            "t": F("start time", "s", 0.0),
+            "arm": I("arm 1..4 (A6 numbering)", 1, 4),
+            "torque": F("torque about the joint; positive pushes the arm tip down", "N m", -100.0, 100.0),
+            "duration": F("pulse length", "s", 0.0, 10.0, lo_open=True),
+        },
+    ),
+    "disturbance.extra_masses": Spec(
+        "table_list",
+        "extra point masses on arms (Fig. 15): shift inertia, add a gravity torque about the joint",
+        item={
+            "arm": I("arm 1..4 (A6 numbering)", 1, 4),
+            "mass": F("mass", "kg", 0.0, 10.0),
+            "distance": F("distance from the joint along the arm", "m", 0.0, 5.0),
+        },
+    ),
+}

@@ -1,0 +1,131 @@
+"""Guidance: turns the configured task into the controller's references each control update.
+
+Types (``GuidanceParams.gtype``): HOVER (a fixed set-point), ATTITUDE (harmonic attitude of
+Eq. 44, zero amplitude for stabilisation), HELIX (Eq. 46), WAYPOINTS (Sec. 4-4 with the
+shared switching logic in ``protocol.waypoint_switching``).
+
+Waypoint memory ``gstate`` (GS_* indices) and ``reached_t`` (time each waypoint was
+reached, NaN until then) live in arrays so a running rig can swap missions between chunks.
+"""
+
+import math
+
+from rig_emulator._jit import jit
+from rig_emulator.control.controller import (
+    MODE_ATTITUDE,
+    MODE_POSITION,
+    REF_ACC,
+    REF_ATT,
+    REF_ATT_ACC,
+    REF_ATT_RATE,
+    REF_MODE,
+    REF_POS,
+    REF_VEL,
+    REF_YAW,
+)
+from rig_emulator.guidance.trajectories import harmonic_attitude, helix_eq46
+from protocol.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
+
+HOVER = 0
+ATTITUDE = 1
+HELIX = 2
+WAYPOINTS = 3
+GUIDANCE_CODES = {"hover": HOVER, "attitude": ATTITUDE, "helix": HELIX, "waypoints": WAYPOINTS}
+
+GS_INDEX = 0  # waypoint being flown to
+GS_T0 = 1  # start time of the current virtual line
+GS_DURATION = 2  # its time budget
+GS_START = 3  # 3: where the line starts
+GS_HOLD_UNTIL = 6  # end of a hold at a reached waypoint, -1 when not holding
+GS_DONE = 7  # 1 once the last waypoint is reached
+GS_STARTED = 8  # 0 until the first leg is set up
+GS_SIZE = 9
+
+
+@jit
+def _start_leg(t, pos, gp, gstate):
+    i = int(gstate[GS_INDEX])
+    gstate[GS_T0] = t
+    gstate[GS_START] = pos[0]
+    gstate[GS_START + 1] = pos[1]
+    gstate[GS_START + 2] = pos[2]
+    wp = gp.waypoints
+    gstate[GS_DURATION] = leg_duration(pos[0], pos[1], pos[2], wp[i, 0], wp[i, 1], wp[i, 2], gp.speed, gp.min_leg_time)
+
+
+@jit
+def _advance(t, pos, gp, gstate):
+    gstate[GS_HOLD_UNTIL] = -1.0
+    gstate[GS_INDEX] += 1.0
+    if int(gstate[GS_INDEX]) >= gp.waypoints.shape[0]:
+        gstate[GS_INDEX] = gp.waypoints.shape[0] - 1
+        gstate[GS_DONE] = 1.0
+    else:
+        _start_leg(t, pos, gp, gstate)
+
+
+@jit
+def _waypoints(t, pos, gp, gstate, reached_t, ref):
+    wp = gp.waypoints
+    if gstate[GS_STARTED] == 0.0:
+        gstate[GS_STARTED] = 1.0
+        gstate[GS_INDEX] = 0.0
+        gstate[GS_HOLD_UNTIL] = -1.0
+        gstate[GS_DONE] = 0.0
+        _start_leg(t, pos, gp, gstate)
+    i = int(gstate[GS_INDEX])
+    tx = wp[i, 0]
+    ty = wp[i, 1]
+    tz = wp[i, 2]
+    if gstate[GS_DONE] == 0.0:
+        if gstate[GS_HOLD_UNTIL] >= 0.0:
+            if t >= gstate[GS_HOLD_UNTIL]:
+                _advance(t, pos, gp, gstate)
+        elif waypoint_reached(pos[0], pos[1], pos[2], tx, ty, tz, gp.radii[i]):
+            reached_t[i] = t
+            if gp.holds[i] > 0.0:
+                gstate[GS_HOLD_UNTIL] = t + gp.holds[i]
+            else:
+                _advance(t, pos, gp, gstate)
+    i = int(gstate[GS_INDEX])
+    if gstate[GS_DONE] != 0.0 or gstate[GS_HOLD_UNTIL] >= 0.0:
+        for k in range(3):
+            ref[REF_POS + k] = wp[i, k]
+            ref[REF_VEL + k] = 0.0
+    else:
+        line_setpoint(
+            t, gstate[GS_T0], gstate[GS_DURATION],
+            gstate[GS_START], gstate[GS_START + 1], gstate[GS_START + 2],
+            wp[i, 0], wp[i, 1], wp[i, 2],
+            ref[REF_POS : REF_POS + 3], ref[REF_VEL : REF_VEL + 3],
+        )
+    for k in range(3):
+        ref[REF_ACC + k] = 0.0
+
+
+@jit
+def guidance_update(t, pos, gp, gstate, reached_t, ref):
+    """Fill ``ref`` (controller.REF_* layout) for time t and the current position."""
+    ref[REF_YAW] = gp.yaw
+    if gp.gtype == ATTITUDE:
+        ref[REF_MODE] = MODE_ATTITUDE
+        harmonic_attitude(
+            t, gp.amplitude, gp.omega,
+            ref[REF_ATT : REF_ATT + 3], ref[REF_ATT_RATE : REF_ATT_RATE + 3], ref[REF_ATT_ACC : REF_ATT_ACC + 3],
+        )
+        ref[REF_ATT + 2] += gp.yaw
+        for k in range(3):
+            ref[REF_POS + k] = math.nan
+            ref[REF_VEL + k] = math.nan
+            ref[REF_ACC + k] = 0.0
+        return
+    ref[REF_MODE] = MODE_POSITION
+    if gp.gtype == HOVER:
+        for k in range(3):
+            ref[REF_POS + k] = gp.hover_position[k]
+            ref[REF_VEL + k] = 0.0
+            ref[REF_ACC + k] = 0.0
+    elif gp.gtype == HELIX:
+        helix_eq46(t, ref[REF_POS : REF_POS + 3], ref[REF_VEL : REF_VEL + 3], ref[REF_ACC : REF_ACC + 3])
+    else:
+        _waypoints(t, pos, gp, gstate, reached_t, ref)
