@@ -17,9 +17,9 @@ Vocabulary
 
 Repetitions are interleaved (rep 1 of every probe, then rep 2 of every probe, ...)
 so that a slow drift of the machine's load affects the subject and its reference
-alike. All subprocesses of one suite run share a numba cache directory created
-empty for that run: repetition 1 of a compiled probe therefore pays the cold
-compile, later repetitions load the cache, and the two are reported separately.
+alike. Each probe gets its own numba cache directory, created empty for the suite
+run and shared by that probe's repetitions: repetition 1 pays the cold compile,
+later repetitions load the cache, and the two are reported separately.
 
 Nothing here asserts on timings; targets are printed as met / not met.
 """
@@ -487,10 +487,14 @@ def run_suite(
     stats = {p.name: ProbeStats(p.name) for p in probes}
     errors: dict[str, str] = {}
     cache_root = tempfile.mkdtemp(prefix="hilms-bench-numba-")
-    env = dict(os.environ)
-    # One empty numba cache per suite run: rep 1 compiles cold, later reps load it.
-    env["HILMS_NUMBA_CACHE"] = cache_root
-    env["NUMBA_CACHE_DIR"] = cache_root
+    # One numba cache directory per probe, empty at the start of the suite run: its
+    # repetition 1 compiles cold (whatever other probes compiled before), later
+    # repetitions load that probe's cache.
+    envs = {}
+    for i, p in enumerate(probes):
+        cache = os.path.join(cache_root, f"probe-{i}")
+        os.mkdir(cache)
+        envs[p.name] = {**os.environ, "HILMS_NUMBA_CACHE": cache, "NUMBA_CACHE_DIR": cache}
     try:
         for rep in range(repeat):
             for p in probes:
@@ -499,7 +503,7 @@ def run_suite(
                 t0 = time.perf_counter()
                 print(f"[rep {rep + 1}/{repeat}] {p.name} ...", end="", file=log, flush=True)
                 try:
-                    figs = run_probe(p, p.params_for(quick), env, timeout)
+                    figs = run_probe(p, p.params_for(quick), envs[p.name], timeout)
                 except ProbeFailed as exc:
                     errors[p.name] = exc.detail
                     print(f" FAILED ({time.perf_counter() - t0:.1f} s)", file=log, flush=True)
@@ -558,10 +562,14 @@ def render_report(doc: Mapping[str, Any]) -> str:
     parts = [head, ""]
     if rows:
         parts.append(format_table(TABLE_HEADERS, rows))
-    notes = [f"  {bn}/{m['name']}: {m['note']}" for bn, e in doc["benchmarks"].items()
-             for m in e["metrics"] if m["note"]]
-    if notes:
-        parts += ["", "notes:"] + notes
+    grouped: dict[tuple[str, str], list[str]] = {}
+    for bn, e in doc["benchmarks"].items():
+        for m in e["metrics"]:
+            if m["note"]:
+                grouped.setdefault((bn, m["note"]), []).append(m["name"])
+    if grouped:
+        parts += ["", "notes:"] + [f"  {bn} / {', '.join(names)}: {note}"
+                                   for (bn, note), names in grouped.items()]
     if problems:
         parts += ["", "ERRORS:"] + [f"  {p}" for p in problems]
     return "\n".join(parts)

@@ -69,6 +69,8 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
                        _simulate: Callable | None = None) -> dict:
     """Warm-up and steady-state speed of ``rig_emulator.api.simulate``.
 
+    ``SimResult.mean_errors`` may be a mapping or a method returning one.
+
     ``_simulate`` replaces the API (tests only; the harness never passes it).
     """
     if inner < 1:
@@ -105,7 +107,8 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
         "first_call_loop_s": float(first.wall_time_s),
         "warmup_overhead_s": first_call_s - float(first.wall_time_s),
     }
-    for k, v in dict(last.mean_errors).items():
+    errors = last.mean_errors() if callable(last.mean_errors) else last.mean_errors
+    for k, v in dict(errors).items():
         if isinstance(v, (int, float)) and not isinstance(v, bool):
             figs[f"mean_error.{k}"] = float(v)
     return figs

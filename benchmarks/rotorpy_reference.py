@@ -173,7 +173,8 @@ def rotorpy_reference(stats: dict[str, ProbeStats]) -> list[Metric]:
     bare, full = stats[ROTORPY_BARE], stats[ROTORPY_SIMULATE]
     return [
         bare.metric("rtf", "bare loop real-time factor", "x real time",
-                    note=f"PERFORMANCE-NOTES recorded ~{NOTED_RTF}x on an earlier machine/software stack"),
+                    note=f"the project's performance notes recorded ~{NOTED_RTF}x (2026-11-22); "
+                         "ratios use only the figure measured in this run"),
         bare.metric("us_per_step", "bare loop time per 1 ms step", "us"),
         full.metric("rtf", "simulate() real-time factor", "x real time"),
         paired_ratio_metric(bare, "rtf", full, "rtf", "bare loop speed-up over simulate()"),

@@ -165,14 +165,13 @@ def _sym(p):
     return np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]])
 
 
-def _fit_norm(y: np.ndarray, matrix, n_matrix: int, bias0: np.ndarray):
+def _fit_norm(y: np.ndarray, matrix, bias0: np.ndarray):
     """LM fit of ``|M(p) (y_i - b)| = 1`` (y normalised by the reference magnitude)."""
     def residual(p):
         M = matrix(p[3:])
         return np.linalg.norm((y - p[:3]) @ M.T, axis=1) - 1.0
 
-    eye = {6: [1, 0, 0, 1, 0, 1]}[n_matrix]
-    p0 = np.concatenate([bias0, eye])
+    p0 = np.concatenate([bias0, [1.0, 0.0, 0.0, 1.0, 0.0, 1.0]])  # identity in both layouts
     sol = least_squares(residual, p0, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14)
     return sol.x[:3], matrix(sol.x[3:]), float(np.sqrt(np.mean(sol.fun ** 2)))
 
@@ -229,7 +228,7 @@ def calibrate_imu_modules(params: dict, truth: ImuModulesTruth, rng: np.random.G
     for m in range(n):
         # accelerometer: |f| = g, then level alignment on the home pose
         ya = static[:, m, 3:6] * lsb[ACCEL] / g
-        b, T, resid[m, ACCEL] = _fit_norm(ya, _upper, 6, np.zeros(3))
+        b, T, resid[m, ACCEL] = _fit_norm(ya, _upper, np.zeros(3))
         home = T @ (ya[0] - b)
         C = _rotation_onto(home, np.array([0.0, 0.0, -1.0])) @ T
         gain[m, ACCEL] = C * lsb[ACCEL]
@@ -237,7 +236,7 @@ def calibrate_imu_modules(params: dict, truth: ImuModulesTruth, rng: np.random.G
         resid[m, ACCEL] *= g
         # magnetometer: ellipsoid |m| = |m_W|
         ym = static[:, m, 6:9] * lsb[MAG] / field_T
-        h, S, resid[m, MAG] = _fit_norm(ym, _sym, 6, ym.mean(axis=0))
+        h, S, resid[m, MAG] = _fit_norm(ym, _sym, ym.mean(axis=0))
         gain[m, MAG] = S * lsb[MAG]
         offset[m, MAG] = h * field_T / lsb[MAG]
         resid[m, MAG] *= field_T

@@ -1,7 +1,7 @@
 """Guidance: turns the configured task into the controller's references each control update.
 
 Types (``GuidanceParams.gtype``): HOVER (a fixed set-point), ATTITUDE (harmonic attitude of
-Eq. 44, zero amplitude for stabilisation), HELIX (Eq. 46), WAYPOINTS (Sec. 4-4 with the
+Eq. 44 about ``att_offset``; zero amplitude and offset for stabilisation), HELIX (Eq. 46), WAYPOINTS (Sec. 4-4 with the
 shared switching logic in ``protocol.waypoint_switching``).
 
 Waypoint memory ``gstate`` (GS_* indices) and ``reached_t`` (time each waypoint was
@@ -65,14 +65,20 @@ def _advance(t, pos, gp, gstate):
 
 
 @jit
+def start_at(index, t, pos, gp, gstate):
+    """Begin flying to waypoint ``index`` on a virtual line from ``pos`` at time t."""
+    gstate[GS_STARTED] = 1.0
+    gstate[GS_INDEX] = float(index)
+    gstate[GS_HOLD_UNTIL] = -1.0
+    gstate[GS_DONE] = 0.0
+    _start_leg(t, pos, gp, gstate)
+
+
+@jit
 def _waypoints(t, pos, gp, gstate, reached_t, ref):
     wp = gp.waypoints
     if gstate[GS_STARTED] == 0.0:
-        gstate[GS_STARTED] = 1.0
-        gstate[GS_INDEX] = 0.0
-        gstate[GS_HOLD_UNTIL] = -1.0
-        gstate[GS_DONE] = 0.0
-        _start_leg(t, pos, gp, gstate)
+        start_at(0, t, pos, gp, gstate)
     i = int(gstate[GS_INDEX])
     tx = wp[i, 0]
     ty = wp[i, 1]
@@ -113,6 +119,8 @@ def guidance_update(t, pos, gp, gstate, reached_t, ref):
             t, gp.amplitude, gp.omega,
             ref[REF_ATT : REF_ATT + 3], ref[REF_ATT_RATE : REF_ATT_RATE + 3], ref[REF_ATT_ACC : REF_ATT_ACC + 3],
         )
+        for k in range(3):
+            ref[REF_ATT + k] += gp.att_offset[k]
         ref[REF_ATT + 2] += gp.yaw
         for k in range(3):
             ref[REF_POS + k] = math.nan

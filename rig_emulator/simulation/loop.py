@@ -15,6 +15,7 @@ from rig_emulator.control.controller import (
     OUT_S,
     OUT_U,
     OUT_UXY,
+    CS_STARTED,
     REF_MODE,
     REF_POS,
     REF_VEL,
@@ -31,13 +32,21 @@ from rig_emulator.simulation import log_layout as L
 def run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
-    cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row,
+    cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
 ):
-    """Advance the rig; returns the next free log row."""
+    """Advance the rig; returns the next free log row.
+
+    Disarmed, the motors are commanded to 0 V and the controller is reset so that it
+    starts afresh on arming.
+    """
     ctrl_dt = dt * ctrl_div
     for k in range(k_start, k_start + n_steps):
         t = k * dt
-        if k % ctrl_div == 0:
+        if not armed:
+            for i in range(4):
+                v_cmd[i] = 0.0
+            cstate[CS_STARTED] = 0.0
+        elif k % ctrl_div == 0:
             phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
             dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, x[10], x[11], x[12])
             guidance_update(t, x[0:3], gp, gstate, reached_t, ref)

@@ -33,7 +33,7 @@ ControlParams = namedtuple(
 
 GuidanceParams = namedtuple(
     "GuidanceParams",
-    "gtype hover_position yaw amplitude omega waypoints radii holds speed min_leg_time",
+    "gtype hover_position yaw amplitude omega att_offset waypoints radii holds speed min_leg_time",
 )
 
 Disturbances = namedtuple("Disturbances", "wind gusts shocks extra")
@@ -136,6 +136,7 @@ def guidance_params(cfg: RigConfig, waypoints=None, radii=None, holds=None) -> G
         yaw=math.radians(cfg["guidance.yaw_deg"]),
         amplitude=np.radians(_arr(cfg["guidance.amplitude_deg"])),
         omega=cfg["guidance.omega"],
+        att_offset=np.zeros(3),
         waypoints=wp,
         radii=r,
         holds=h,

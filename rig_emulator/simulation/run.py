@@ -82,6 +82,7 @@ class Simulation:
         self.log = np.full((log_capacity, L.NCOLS), np.nan)
         self.log_row = 0
         self.k = 0
+        self.armed = True
 
     @property
     def time(self) -> float:
@@ -94,7 +95,7 @@ class Simulation:
             self.k, n_steps, self.dt, self.ctrl_div, self.log_div,
             self.x, self.v_cmd, self.pp, self.cp, self.gp, d.wind, d.gusts, d.shocks, d.extra,
             self.cstate, self.gstate, self.reached_t, self.ref, self.cout, self.scratch, self.work, self.R,
-            self.log, self.log_row,
+            self.log, self.log_row, self.armed,
         )
         self.k += n_steps
 

@@ -237,7 +237,8 @@ def test_run_suite_end_to_end(tmp_path):
 
     runs = doc["probes"]["subject"]["runs"]
     assert len(runs) == 2 and runs[0]["pid"] != runs[1]["pid"]  # fresh process per repetition
-    assert runs[0]["cache"] and runs[0]["cache"] == runs[1]["cache"]  # one numba cache per run
+    assert runs[0]["cache"] and runs[0]["cache"] == runs[1]["cache"]  # one numba cache per probe
+    assert doc["probes"]["reference"]["runs"][0]["cache"] != runs[0]["cache"]
     assert not os.path.exists(runs[0]["cache"])  # removed afterwards
     speed_entry = doc["benchmarks"]["speed"]
     assert speed_entry["status"] == "ok"
