@@ -425,6 +425,22 @@ def run_probe(probe: Probe, params: Mapping[str, Any], env: Mapping[str, str],
         return payload["figures"]
 
 
+def varying_labels(runs: Sequence[Mapping[str, Scalar]]) -> dict[str, list[Scalar]]:
+    """Text figures (versions, source digests) that differ between repetitions.
+
+    A probe labels what it measured with string figures; if one changes during a
+    suite run (e.g. the sources were edited meanwhile), its repetitions did not
+    measure the same thing and the report says so.
+    """
+    out: dict[str, list[Scalar]] = {}
+    keys = dict.fromkeys(k for r in runs for k, v in r.items() if isinstance(v, str))
+    for k in keys:
+        seen = list(dict.fromkeys(r.get(k) for r in runs))
+        if len(seen) > 1:
+            out[k] = seen
+    return out
+
+
 def machine_info() -> dict[str, Any]:
     from importlib import metadata
 
@@ -521,6 +537,7 @@ def run_suite(
             "params": p.params_for(quick),
             "runs": stats[p.name].runs,
             "error": errors.get(p.name),
+            "varying_labels": varying_labels(stats[p.name].runs),
         }
     for b in benches:
         failed = [n for n in b.probes if n in errors]
@@ -570,6 +587,10 @@ def render_report(doc: Mapping[str, Any]) -> str:
     if grouped:
         parts += ["", "notes:"] + [f"  {bn} / {', '.join(names)}: {note}"
                                    for (bn, note), names in grouped.items()]
+    varying = [f"  {name}: {k} changed between repetitions: {vals}"
+               for name, pr in doc["probes"].items() for k, vals in pr.get("varying_labels", {}).items()]
+    if varying:
+        parts += ["", "WARNING: repetitions did not all measure the same thing:"] + varying
     if problems:
         parts += ["", "ERRORS:"] + [f"  {p}" for p in problems]
     return "\n".join(parts)

@@ -18,6 +18,7 @@ RotorPy's bare 1 kHz loop with its IMU (``rotorpy-1khz-imu``).
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable
 
@@ -53,6 +54,15 @@ def _import_simulate() -> Callable:
     return simulate
 
 
+def _source_label() -> str:
+    """Which rig sources were measured: the digest naming the numba cache, when available."""
+    try:
+        from rig_emulator import _jit
+    except ImportError:
+        return "unknown"
+    return os.path.basename(getattr(_jit, "CACHE_DIR", "")) or "unknown"
+
+
 def _check(result, duration: float) -> None:
     for attr in ("sim_time_s", "wall_time_s", "steps", "mean_errors"):
         if not hasattr(result, attr):
@@ -78,6 +88,7 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
     t0 = time.perf_counter()
     simulate = _simulate if _simulate is not None else _import_simulate()
     import_s = time.perf_counter() - t0
+    source = _source_label() if _simulate is None else "stand-in"
 
     t1 = time.perf_counter()
     first = simulate(scenario, strategy=strategy, duration=duration, seed=seed)
@@ -95,6 +106,7 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
         walls.append(last.wall_time_s)
 
     figs = {
+        "source": source,
         "rtf": median(rtfs),
         "rtf_end_to_end": median(e2e),
         "wall_time_s": median(walls),

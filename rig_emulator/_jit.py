@@ -6,8 +6,10 @@ Every compiled function in the project is decorated with :func:`jit` from here. 
 * **No stale machine code.** numba keys its on-disk cache on the file that defines a
   function only, so editing a callee in another module (or a constant it imports) does
   not invalidate a caller's cached code. We point numba's cache at a directory named by
-  a hash of every source file of ``rig_emulator`` and ``protocol``: any edit gives a
-  fresh cache, an unchanged tree reuses the old one (a fresh process starts in < 1 s).
+  a hash of every source file under :data:`COMPILED_ROOTS` (the only places compiled code
+  may live; a test checks it): any edit there gives a fresh cache, an unchanged tree
+  reuses the old one (a fresh process starts in about a second). Old cache directories
+  beyond the newest eight are removed.
 * **Determinism.** ``fastmath`` stays off, so results are bit-identical run to run.
 
 Set ``HILMS_NUMBA_CACHE`` to choose the cache root (default ``~/.cache/hilms-sil``).
@@ -17,32 +19,65 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 from pathlib import Path
 
 import numba
 
-_PACKAGE_ROOTS = ("rig_emulator", "protocol")
+COMPILED_ROOTS = (
+    "rig_emulator/_jit.py",
+    "rig_emulator/physics",
+    "rig_emulator/control",
+    "rig_emulator/guidance",
+    "rig_emulator/simulation",
+    "rig_emulator/sensors",
+    "rig_emulator/estimation",
+    "protocol/waypoint_switching.py",
+)
+_KEEP_CACHES = 8
+
+
+def compiled_source_files() -> list[Path]:
+    """Every Python file whose compiled code the cache may hold."""
+    here = Path(__file__).resolve().parent.parent
+    files: list[Path] = []
+    for root in COMPILED_ROOTS:
+        path = here / root
+        files.extend(sorted(path.rglob("*.py")) if path.is_dir() else [path])
+    return files
 
 
 def _source_digest() -> str:
     here = Path(__file__).resolve().parent.parent
     h = hashlib.sha256(numba.__version__.encode())
-    for root in _PACKAGE_ROOTS:
-        for path in sorted((here / root).rglob("*.py")):
-            h.update(str(path.relative_to(here)).encode())
-            h.update(path.read_bytes())
+    for path in compiled_source_files():
+        h.update(str(path.relative_to(here)).encode())
+        h.update(path.read_bytes())
     return h.hexdigest()[:16]
 
 
 def _cache_dir() -> str:
-    base = os.environ.get("HILMS_NUMBA_CACHE") or os.path.join(
-        os.path.expanduser("~"), ".cache", "hilms-sil"
-    )
+    base = os.environ.get("HILMS_NUMBA_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "hilms-sil")
     return os.path.join(base, "numba-" + _source_digest())
+
+
+def _prune(current: str) -> None:
+    base = Path(current).parent
+    try:
+        old = sorted(
+            (p for p in base.glob("numba-*") if p.is_dir() and str(p) != current),
+            key=lambda p: p.stat().st_mtime,
+            reverse=True,
+        )
+        for stale in old[_KEEP_CACHES - 1 :]:
+            shutil.rmtree(stale, ignore_errors=True)
+    except OSError:
+        pass  # pruning is housekeeping; a racing process may have removed a directory first
 
 
 CACHE_DIR = _cache_dir()
 numba.config.CACHE_DIR = CACHE_DIR
+_prune(CACHE_DIR)
 
 
 def jit(*args, **kwargs):

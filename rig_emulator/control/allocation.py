@@ -6,7 +6,8 @@ body axes of B (FRD). The controllers produce torques about the axes of the Eule
 (``Q = R_WB diag(1,-1,-1)``, docs/CONVENTIONS.md); :func:`euler_torque_to_body` is the one
 place that converts them.
 
-Priority when a motor would leave ``[0, f_max]``: roll/pitch first (scaled down only if
+When the exact inverse keeps every motor in ``[0, f_max]`` it is used as is. Otherwise the
+priority is roll/pitch first (scaled down only if
 their differential alone exceeds the range), then the collective is shifted to fit, then
 yaw gets what is left.
 """
@@ -38,6 +39,18 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, forces):
     r2 = -b
     r3 = -a
     r4 = b
+    collective = 0.25 * u1
+    e1 = collective + r1 + y
+    e2 = collective + r2 - y
+    e3 = collective + r3 + y
+    e4 = collective + r4 - y
+    tol = 1e-9 * f_max  # rounding of the inverse itself is not saturation
+    if min(min(e1, e2), min(e3, e4)) >= -tol and max(max(e1, e2), max(e3, e4)) <= f_max + tol:
+        forces[0] = _clip(e1, f_max)
+        forces[1] = _clip(e2, f_max)
+        forces[2] = _clip(e3, f_max)
+        forces[3] = _clip(e4, f_max)
+        return flags
     hi_rp = max(max(r1, r2), max(r3, r4))
     lo_rp = min(min(r1, r2), min(r3, r4))
     span = hi_rp - lo_rp
@@ -50,7 +63,6 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, forces):
         hi_rp *= scale
         lo_rp *= scale
         flags |= SATURATED_ROLL_PITCH
-    collective = 0.25 * u1
     lo_c = -lo_rp
     hi_c = f_max - hi_rp
     if collective < lo_c:

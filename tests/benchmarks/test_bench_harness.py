@@ -23,6 +23,7 @@ from benchmarks.harness import (
     ratio,
     render_report,
     run_suite,
+    varying_labels,
     write_json,
 )
 from benchmarks.rig_core import SCENARIOS, _probe_name, rig_core, rig_simulate_probe
@@ -143,6 +144,13 @@ def test_probe_stats_metric_first_and_pairing():
         paired_ratio_metric(s, "rtf", ProbeStats("e", [{"rtf": 1.0}]), "rtf", "x")
 
 
+def test_varying_labels():
+    assert varying_labels([{"v": "a", "x": 1.0}, {"v": "a", "x": 2.0}]) == {}
+    assert varying_labels([{"v": "a"}, {"v": "b"}, {"v": "a"}]) == {"v": ["a", "b"]}
+    doc_runs = [{"source": "numba-1", "rtf": 1.0}, {"source": "numba-2", "rtf": 1.0}]
+    assert "source" in varying_labels(doc_runs)
+
+
 def test_worker_rejects_bad_figures():
     assert _worker._check_figures({"a": 1, "b": "s", "c": None}) == {"a": 1, "b": "s", "c": None}
     with pytest.raises(ValueError):
@@ -189,6 +197,7 @@ def test_rig_probe_with_stand_in():
     assert figs["mean_error.position_m"] == 0.01
     assert "mean_error.label" not in figs
     assert figs["first_call_s"] >= 0 and figs["rtf_end_to_end"] > 0
+    assert figs["source"] == "stand-in"
     json.dumps(figs)
 
 

@@ -1,0 +1,20 @@
+"""The rig on MAVLink: serves the running :class:`~rig_emulator.simulation.live.LiveRig` to
+ground stations (QGroundControl, MAVProxy, MAVSDK, pymavlink scripts).
+
+Layout (one concept per module):
+
+* :mod:`endpoints` - sockets named by mavutil connection strings (udpout, udpin, tcpin, tcp);
+  each remote peer becomes a :class:`~rig_emulator.link.channel.Channel`.
+* :mod:`channel` - one peer: its MAVLink parser/encoder (pymavlink's generated dialect),
+  its counters, its stream schedule and its transmit buffer.
+* :mod:`mavlink_units` - the one place where SI numbers become MAVLink units (mm, cdeg,
+  degE7, mG, ...); frames go through :mod:`protocol.frames` and :mod:`protocol.geodesy`.
+* :mod:`ideal_sensors` - the sensor readings the streams publish (ideal until the sensor
+  layer adds its fields to the snapshot).
+* :mod:`telemetry_*` - one builder per streamed message: snapshot -> message.
+* :mod:`streams` - which message goes out how often (per simulated time).
+* :mod:`params` / :mod:`param_service` - the parameter table and protocol.
+* :mod:`modes`, :mod:`commands`, :mod:`offboard`, :mod:`ftp` - the other microservices.
+* :mod:`server` - wiring and the paced loop; :mod:`serve` - the command line.
+* :mod:`testing` - start a rig on free ports from tests and scripts.
+"""

@@ -1,0 +1,156 @@
+"""COMMAND_LONG / COMMAND_INT: every command is answered at once with one COMMAND_ACK.
+
+Parameters arrive as floats; NaN means "unset" and becomes ``None`` before any handler
+sees it (nothing ever casts a NaN). A handler returns a MAV_RESULT and the messages to
+send to the requester after the ACK (e.g. the message MAV_CMD_REQUEST_MESSAGE asked for).
+A retry (``confirmation`` > 0) of the previous command of the same peer is ACKed with the
+previous result without acting twice. Unknown commands get MAV_RESULT_UNSUPPORTED.
+
+Supported: COMPONENT_ARM_DISARM, DO_SET_MODE, REQUEST_MESSAGE, REQUEST_AUTOPILOT_CAPABILITIES,
+SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MAV_CMD_HILMS_SHOCK and
+MAV_CMD_HILMS_EXTRA_MASS. Answered UNSUPPORTED until the sensor layer exists:
+PREFLIGHT_CALIBRATION and MAV_CMD_HILMS_SENSOR_FAULT.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from protocol.dialect import mavlink as M
+from rig_emulator.link.stream_table import ON_REQUEST, STREAMS
+
+ACCEPTED, DENIED, UNSUPPORTED, FAILED = (M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED,
+                                         M.MAV_RESULT_UNSUPPORTED, M.MAV_RESULT_FAILED)
+
+
+def _unset_nan(value: float):
+    return None if not math.isfinite(value) else float(value)
+
+
+@dataclass(frozen=True)
+class Command:
+    command: int
+    params: tuple  # 7 entries, None where unset (NaN)
+    confirmation: int
+
+    @classmethod
+    def from_long(cls, msg) -> "Command":
+        raw = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
+        return cls(msg.command, tuple(_unset_nan(p) for p in raw), msg.confirmation)
+
+    @classmethod
+    def from_int(cls, msg) -> "Command":
+        raw = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
+        return cls(msg.command, tuple(_unset_nan(p) for p in raw), 0)
+
+    def p(self, i: int):
+        """Parameter ``i`` (1..7), ``None`` when unset."""
+        return self.params[i - 1]
+
+    def int_param(self, i: int):
+        """Parameter ``i`` as an integer, ``None`` when unset or not a whole number."""
+        v = self.params[i - 1]
+        return int(v) if v is not None and v == int(v) else None
+
+
+def _arm(cmd, srv, channel):
+    flag = cmd.p(1)
+    if flag not in (0.0, 1.0):
+        return DENIED, []
+    srv.rig.arm(flag == 1.0)
+    srv.broadcast_heartbeat()
+    return ACCEPTED, []
+
+
+def _set_mode(cmd, srv, channel):
+    base = cmd.int_param(1)
+    main = cmd.int_param(2)
+    if base is None or not base & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED or main is None:
+        return DENIED, []
+    sub = cmd.int_param(3) or 0
+    if not srv.modes.enter(main, sub, srv.rig):
+        return UNSUPPORTED, []
+    srv.broadcast_heartbeat()
+    return ACCEPTED, []
+
+
+def _request_message(cmd, srv, channel):
+    msg_id = cmd.int_param(1)
+    if msg_id is None or msg_id not in ON_REQUEST:
+        return UNSUPPORTED, []
+    return ACCEPTED, srv.build(msg_id)
+
+
+def _capabilities(cmd, srv, channel):
+    return ACCEPTED, srv.build(M.MAVLINK_MSG_ID_AUTOPILOT_VERSION)
+
+
+def _home(cmd, srv, channel):
+    return ACCEPTED, srv.build(M.MAVLINK_MSG_ID_HOME_POSITION)
+
+
+def _set_interval(cmd, srv, channel):
+    msg_id, interval = cmd.int_param(1), cmd.p(2)
+    if msg_id is None or msg_id not in STREAMS:
+        return UNSUPPORTED, []
+    if interval is None or (interval < 0 and interval != -1):
+        return DENIED, []
+    channel.schedule.set_interval(msg_id, interval, srv.rig.time_s)
+    return ACCEPTED, []
+
+
+def _get_interval(cmd, srv, channel):
+    msg_id = cmd.int_param(1)
+    if msg_id is None or msg_id < 0 or msg_id > 2**24 - 1:
+        return DENIED, []
+    interval = channel.schedule.interval_us(msg_id) if msg_id in STREAMS else 0
+    return ACCEPTED, [M.MAVLink_message_interval_message(message_id=msg_id & 0xFFFF, interval_us=interval)]
+
+
+def _shock(cmd, srv, channel):
+    arm, torque, duration = cmd.int_param(1), cmd.p(2), cmd.p(3)
+    if arm is None or torque is None or duration is None:
+        return DENIED, []
+    try:
+        srv.rig.apply_shock(arm, torque, duration)
+    except ValueError as exc:
+        srv.statustext(channel, M.MAV_SEVERITY_WARNING, f"shock rejected: {exc}")
+        return DENIED, []
+    return ACCEPTED, []
+
+
+def _extra_mass(cmd, srv, channel):
+    arm, mass, distance = cmd.int_param(1), cmd.p(2), cmd.p(3)
+    if arm is None or mass is None or distance is None:
+        return DENIED, []
+    try:
+        srv.rig.set_extra_mass(arm, mass, distance)
+    except ValueError as exc:
+        srv.statustext(channel, M.MAV_SEVERITY_WARNING, f"extra mass rejected: {exc}")
+        return DENIED, []
+    return ACCEPTED, []
+
+
+HANDLERS = {
+    M.MAV_CMD_COMPONENT_ARM_DISARM: _arm,
+    M.MAV_CMD_DO_SET_MODE: _set_mode,
+    M.MAV_CMD_REQUEST_MESSAGE: _request_message,
+    M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: _capabilities,
+    M.MAV_CMD_GET_HOME_POSITION: _home,
+    M.MAV_CMD_SET_MESSAGE_INTERVAL: _set_interval,
+    M.MAV_CMD_GET_MESSAGE_INTERVAL: _get_interval,
+    M.MAV_CMD_HILMS_SHOCK: _shock,
+    M.MAV_CMD_HILMS_EXTRA_MASS: _extra_mass,
+}
+
+
+def execute(cmd: Command, srv, channel) -> tuple[int, list]:
+    """Run one command for ``channel``; returns (MAV_RESULT, messages to send after the ACK)."""
+    last = channel.last_command
+    if cmd.confirmation > 0 and last is not None and last[0] == (cmd.command, cmd.params):
+        return last[1], []
+    handler = HANDLERS.get(cmd.command)
+    result, follow = (UNSUPPORTED, []) if handler is None else handler(cmd, srv, channel)
+    channel.last_command = ((cmd.command, cmd.params), result)
+    return result, follow

@@ -1,0 +1,203 @@
+"""The rig's parameters as MAVLink parameters: stable short names, REAL32 values.
+
+The table is built from :data:`rig_emulator.config.schema.SCHEMA` in schema order: each
+scalar float is one parameter, each vec3 (or fixed-length list) element one parameter,
+each text choice (strategy, switching function, membership geometry) its index into the
+choices, each bool 0/1. Every value is sent as MAV_PARAM_TYPE_REAL32 (MAVSDK and MAVProxy
+decode integer types differently for a generic autopilot) in the schema's unit.
+
+Names (at most 16 characters, unique; tested) are ``SHORT_NAMES[key]`` followed, for list
+elements, by the key's element suffix (``_PHI``/``_THE``/``_PSI`` for attitude axes,
+``_X``/``_Y``/``_Z`` for world axes, ``1``..``4`` for ``flc.r``). Examples:
+``smc.k[0]`` -> ``SMC_K_PHI``, ``flc.d1_phi_deg`` -> ``FLC_D1_PHI`` (deg),
+``guidance.switching_radius`` -> ``WP_RADIUS``, ``control.strategy`` -> ``CTL_STRATEGY``
+(0 smc-flc, 1 flc, 2 smc, 3 pid, as HILMS_STRATEGY). ``rig-emulator params`` and
+:func:`describe` list them all.
+
+Keys in :data:`EXCLUDED` are not parameters of a running rig, for the reason given.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rig_emulator.config.schema import SCHEMA, Spec
+
+ATT = ("_PHI", "_THE", "_PSI")
+XYZ = ("_X", "_Y", "_Z")
+
+#: dotted schema key -> (short name, element suffixes or None)
+SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
+    "sim.physics_rate_hz": ("SIM_PHYS_HZ", None),
+    "sim.control_rate_hz": ("SIM_CTRL_HZ", None),
+    "sim.log_rate_hz": ("SIM_LOG_HZ", None),
+    "sim.ground": ("SIM_GROUND", None),
+    "airframe.mass": ("AF_MASS", None),
+    "airframe.ixx": ("AF_IXX", None),
+    "airframe.iyy": ("AF_IYY", None),
+    "airframe.izz": ("AF_IZZ", None),
+    "airframe.arm_length": ("AF_ARM_LEN", None),
+    "airframe.rotor_inertia": ("AF_ROTOR_J", None),
+    "airframe.km_over_kf": ("AF_KM_KF", None),
+    "airframe.gravity": ("AF_GRAVITY", None),
+    "motors.thrust_per_volt_grf": ("MOT_GRF_PER_V", None),
+    "motors.voltage_max": ("MOT_V_MAX", None),
+    "motors.thrust_ceiling_grf": ("MOT_F_MAX_GRF", None),
+    "motors.time_constant": ("MOT_TAU", None),
+    "motors.kf": ("MOT_KF", None),
+    "control.strategy": ("CTL_STRATEGY", None),
+    "control.max_tilt_deg": ("CTL_MAX_TILT", None),
+    "control.reference_time_constant": ("CTL_REF_TAU", None),
+    "smc.k": ("SMC_K", ATT),
+    "smc.lam": ("SMC_LAM", ATT),
+    "smc.switching": ("SMC_SWITCHING", None),
+    "smc.boundary_layer": ("SMC_BL", None),
+    "smc.position_k": ("SMC_POS_K", XYZ),
+    "smc.position_lam": ("SMC_POS_LAM", XYZ),
+    "smc.position_boundary_layer": ("SMC_POS_BL", None),
+    "flc.r": ("FLC_R", ("1", "2", "3", "4")),
+    "flc.geometry": ("FLC_GEOMETRY", None),
+    "flc.d1_phi_deg": ("FLC_D1_PHI", None),
+    "flc.d1_theta_deg": ("FLC_D1_THE", None),
+    "flc.d1_psi_deg": ("FLC_D1_PSI", None),
+    "flc.d1_dphi_deg_s": ("FLC_D1_DPHI", None),
+    "flc.d1_dtheta_deg_s": ("FLC_D1_DTHE", None),
+    "flc.d1_dpsi_deg_s": ("FLC_D1_DPSI", None),
+    "flc.d1_u2": ("FLC_D1_U2", None),
+    "flc.d1_u3": ("FLC_D1_U3", None),
+    "flc.d1_u4": ("FLC_D1_U4", None),
+    "flc.d1_x": ("FLC_D1_X", None),
+    "flc.d1_y": ("FLC_D1_Y", None),
+    "flc.d1_z": ("FLC_D1_Z", None),
+    "flc.d1_dx": ("FLC_D1_DX", None),
+    "flc.d1_dy": ("FLC_D1_DY", None),
+    "flc.d1_dz": ("FLC_D1_DZ", None),
+    "flc.d1_u1": ("FLC_D1_U1", None),
+    "flc.d1_ux": ("FLC_D1_UX", None),
+    "flc.d1_uy": ("FLC_D1_UY", None),
+    "pid.attitude_kp": ("PID_ATT_KP", ATT),
+    "pid.attitude_ki": ("PID_ATT_KI", ATT),
+    "pid.attitude_kd": ("PID_ATT_KD", ATT),
+    "pid.position_kp": ("PID_POS_KP", XYZ),
+    "pid.position_ki": ("PID_POS_KI", XYZ),
+    "pid.position_kd": ("PID_POS_KD", XYZ),
+    "pid.integral_limit": ("PID_I_LIMIT", None),
+    "guidance.omega": ("GUI_OMEGA", None),
+    "guidance.speed": ("GUI_SPEED", None),
+    "guidance.switching_radius": ("WP_RADIUS", None),
+    "guidance.min_leg_time": ("GUI_MIN_LEG_T", None),
+    "disturbance.wind_force": ("DIST_WIND", XYZ),
+}
+
+#: schema keys that are not parameters of a running rig, and why
+EXCLUDED: dict[str, str] = {
+    "sim.duration": "the serve run's length is --duration",
+    "sim.seed": "an integer beyond REAL32 precision; fixed at start",
+    "airframe.name": "text, a preset name",
+    "guidance.type": "chosen by flight modes and set-point commands",
+    "guidance.hover_position": "set by position-target commands and modes",
+    "guidance.yaw_deg": "set by position/attitude-target commands",
+    "guidance.amplitude_deg": "harmonic guidance is a scenario chosen at start",
+    "guidance.waypoints": "a list; the mission protocol carries waypoints",
+    "initial.position": "initial state only",
+    "initial.euler_deg": "initial state only",
+    "disturbance.gusts": "a list of tables; fixed at start",
+    "disturbance.shocks": "injected with MAV_CMD_HILMS_SHOCK",
+    "disturbance.extra_masses": "injected with MAV_CMD_HILMS_EXTRA_MASS",
+}
+
+
+@dataclass(frozen=True)
+class Param:
+    """One MAVLink parameter: ``key`` (and ``element`` for list entries) of the schema."""
+
+    index: int
+    name: str
+    key: str
+    element: int | None
+    spec: Spec
+
+    def value(self, cfg) -> float:
+        """The current value as the float the wire carries."""
+        v = cfg[self.key]
+        if self.element is not None:
+            v = v[self.element]
+        if self.spec.kind == "str":
+            return float(self.spec.choices.index(v))
+        return float(v)
+
+    def to_config(self, value: float, cfg):
+        """The config value for a wire value; raises ValueError with a reason when unusable."""
+        if not math.isfinite(value):
+            raise ValueError(f"{self.name}: {value} is not a finite number")
+        if self.spec.kind == "str":
+            n = len(self.spec.choices)
+            if value != int(value) or not 0 <= value < n:
+                options = ", ".join(f"{i} {c}" for i, c in enumerate(self.spec.choices))
+                raise ValueError(f"{self.name}: {value:g} must be an index 0..{n - 1} ({options})")
+            return self.spec.choices[int(value)]
+        if self.spec.kind == "bool":
+            if value not in (0.0, 1.0):
+                raise ValueError(f"{self.name}: {value:g} must be 0 or 1")
+            return bool(value)
+        if self.element is not None:
+            values = list(cfg[self.key])
+            values[self.element] = value
+            return values
+        return value
+
+    @property
+    def unit(self) -> str:
+        return self.spec.unit
+
+
+def build_table() -> list[Param]:
+    """Every parameter in schema order; raises if a schema key is neither named nor excluded."""
+    table = []
+    for key, spec in SCHEMA.items():
+        if key in EXCLUDED:
+            continue
+        if key not in SHORT_NAMES:
+            raise KeyError(f"schema key {key!r} has no MAVLink parameter name (add it to SHORT_NAMES or EXCLUDED)")
+        base, suffixes = SHORT_NAMES[key]
+        if suffixes is None:
+            table.append(Param(len(table), base, key, None, spec))
+        else:
+            for i, suffix in enumerate(suffixes):
+                table.append(Param(len(table), base + suffix, key, i, spec))
+    return table
+
+
+class ParamTable:
+    """Lookup by index and by name."""
+
+    def __init__(self):
+        self.params = build_table()
+        self.by_name = {p.name: p for p in self.params}
+
+    def __len__(self) -> int:
+        return len(self.params)
+
+    def lookup(self, name: str | None, index: int) -> Param | None:
+        """PARAM_REQUEST_READ rules: index >= 0 wins, else the name."""
+        if index >= 0:
+            return self.params[index] if index < len(self.params) else None
+        return self.by_name.get(name or "")
+
+
+def describe(table: ParamTable | None = None) -> str:
+    """A text listing: name, dotted key (element), unit."""
+    table = table or ParamTable()
+    lines = []
+    for p in table.params:
+        key = p.key if p.element is None else f"{p.key}[{p.element}]"
+        lines.append(f"{p.index:3d} {p.name:16s} {key} [{p.unit}]" if p.unit else f"{p.index:3d} {p.name:16s} {key}")
+    return "\n".join(lines)
+
+
+def as_float32(value: float) -> float:
+    """The value a REAL32 parameter carries (what the ground station will see)."""
+    return float(np.float32(value))

@@ -1,0 +1,58 @@
+"""Per-peer stream schedules counted in simulated time.
+
+Each streamed message has an interval (s of simulated time; 0 = off). A message is due
+when the simulated clock reaches its next due time; the next due time then advances by
+one interval, so the average rate is exact even when the link is serviced in chunks.
+Intervals shorter than the service period are raised to it (the link cannot emit more
+often than it runs).
+"""
+
+from __future__ import annotations
+
+import math
+
+EPS_S = 1e-9
+
+
+class StreamSchedule:
+    def __init__(self, default_hz: dict[int, float], min_interval_s: float):
+        self.default_hz = dict(default_hz)
+        self.min_interval_s = min_interval_s
+        self.interval_s: dict[int, float] = {}
+        self.next_due: dict[int, float] = {}
+        for msg_id, hz in self.default_hz.items():
+            self.set_rate(msg_id, hz, now=0.0)
+
+    def knows(self, msg_id: int) -> bool:
+        return msg_id in self.default_hz
+
+    def set_rate(self, msg_id: int, hz: float, now: float) -> float:
+        """Stream ``msg_id`` at ``hz`` (0 = off); returns the interval in effect (s)."""
+        interval = 0.0 if hz <= 0.0 or not math.isfinite(hz) else max(1.0 / hz, self.min_interval_s)
+        self.interval_s[msg_id] = interval
+        self.next_due[msg_id] = now
+        return interval
+
+    def set_interval(self, msg_id: int, interval_us: float, now: float) -> float:
+        """MAV_CMD_SET_MESSAGE_INTERVAL semantics: -1 off, 0 default, else microseconds."""
+        if interval_us == 0:
+            return self.set_rate(msg_id, self.default_hz[msg_id], now)
+        if interval_us < 0:
+            return self.set_rate(msg_id, 0.0, now)
+        return self.set_rate(msg_id, 1e6 / interval_us, now)
+
+    def interval_us(self, msg_id: int) -> int:
+        """MESSAGE_INTERVAL semantics: -1 off, else microseconds."""
+        interval = self.interval_s.get(msg_id, 0.0)
+        return -1 if interval <= 0.0 else int(round(interval * 1e6))
+
+    def due(self, now: float) -> list[int]:
+        """Message ids due at simulated time ``now``; advances their schedules."""
+        out = []
+        for msg_id, interval in self.interval_s.items():
+            if interval <= 0.0 or now + EPS_S < self.next_due[msg_id]:
+                continue
+            out.append(msg_id)
+            nxt = self.next_due[msg_id] + interval
+            self.next_due[msg_id] = nxt if nxt + EPS_S > now else now + interval
+        return out
