@@ -4,6 +4,8 @@
   runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors.
 * ``rig-emulator params [--scenario NAME]`` lists every parameter with its value, unit and range.
 * ``rig-emulator scenarios`` lists the scenario and airframe presets.
+* ``rig-emulator serve [--mavlink URL ...] [--speedup X] ...`` (also ``rig-emulator`` with no
+  subcommand) runs the rig and serves MAVLink (see :mod:`rig_emulator.link.serve`).
 
 Exit codes: 0 success, 2 bad arguments or configuration.
 """
@@ -21,6 +23,9 @@ import numpy as np
 from protocol.mean_error import PAPER_TABLE_6, format_table
 from rig_emulator.config.loader import ConfigError, available, load_config, parse_override
 from rig_emulator.config.schema import SCHEMA, STRATEGIES
+from rig_emulator.link.serve_args import add_serve_args
+
+SUBCOMMANDS = ("simulate", "params", "scenarios", "serve")
 
 
 def _add_config_args(p: argparse.ArgumentParser) -> None:
@@ -99,6 +104,12 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def cmd_serve(args) -> int:
+    from rig_emulator.link.serve import cmd_serve as serve
+
+    return serve(args, _overrides(args))
+
+
 def cmd_params(args) -> int:
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=_overrides(args))
     for key, spec in SCHEMA.items():
@@ -118,6 +129,11 @@ def cmd_scenarios(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rig-emulator", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("serve", help="run the rig and serve MAVLink (the default command)")
+    add_serve_args(p)
+    _add_config_args(p)
+    p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser("simulate", help="run a scenario headless and print the mean errors")
     p.add_argument("--scenario", required=True, help="scenario preset (see `rig-emulator scenarios`)")
@@ -142,6 +158,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or (argv[0] not in SUBCOMMANDS and argv[0] not in ("-h", "--help")):
+        argv = ["serve", *argv]  # plain `rig-emulator [options]` serves MAVLink
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -102,6 +102,16 @@ def check_value(key: str, spec: Spec, value: Any) -> Any:
         if spec.length is not None and len(value) != spec.length:
             raise ConfigError(f"{key} = {value!r}: must have exactly {spec.length} numbers")
         return [_check_number(f"{key}[{i}]", spec, v, integer=False) for i, v in enumerate(value)]
+    if spec.kind == "tree":
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{key}: must be a table of overrides ([{key}] in TOML)")
+        from rig_emulator.sensors.presets import load_sensor_preset  # the sensor presets validate their own trees
+
+        try:
+            load_sensor_preset(key.split(".", 1)[1], value)
+        except ValueError as exc:
+            raise ConfigError(f"{key}: {exc}") from None
+        return dict(value)
     if spec.kind == "table_list":
         if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
             raise ConfigError(f"{key}: must be a list of tables ([[{key}]] in TOML)")

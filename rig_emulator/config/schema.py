@@ -136,6 +136,41 @@ SCHEMA: dict[str, Spec] = {
     # --- initial state -------------------------------------------------------------------------
     "initial.position": V3("initial virtual position (world ENU)", "m"),
     "initial.euler_deg": V3("initial phi, theta, psi", "deg", -180.0, 180.0),
+    # --- sensors and estimation (Sec. 4-1) ----------------------------------------------------
+    "sensors.simulate": Spec("bool", "simulate the five IMU modules and four load cells (false: no sensor models at all)"),
+    "sensors.feedback": S(
+        "what the controllers see: 'estimated' (the rig's sensors and estimators, as on the hardware) or 'ideal' (true state)",
+        ("estimated", "ideal"),
+    ),
+    "sensors.calibration": S(
+        "IMU calibration applied to raw readings: 'levenberg-marquardt' (Sec. 4-1) or 'none' (datasheet scaling only)",
+        ("levenberg-marquardt", "none"),
+    ),
+    "sensors.calibration_file": Spec(
+        "str", "IMU calibration file to load (from `rig-emulator calibrate`); empty: run the procedure at start-up"
+    ),
+    "estimation.ensemble": S("combination of the five modules: 'mean' (paper), 'median' or 'robust_mean'", ("mean", "median", "robust_mean")),
+    "estimation.load_cell_filter": S("load-cell smoothing after the guards: 'iir' (paper), 'kalman' or 'none'", ("iir", "kalman", "none")),
+    "estimation.tau_roll_pitch": F("complementary filter: time constant of the accelerometer tilt correction", "s", 0.0, 1e3, lo_open=True),
+    "estimation.tau_yaw": F("complementary filter: time constant of the magnetometer heading correction", "s", 0.0, 1e3, lo_open=True),
+    "estimation.accel_lowpass_hz": F("low-pass on the accelerometers before the tilt correction", "Hz", 0.0, 1e3, lo_open=True),
+    "estimation.iir_cutoff_hz": F("cut-off of the load cells' IIR low-pass", "Hz", 0.0, 1e3, lo_open=True),
+    "sensor_models.mpu6050": Spec("tree", "overrides of presets/sensors/mpu6050.toml (datasheet figures)"),
+    "sensor_models.hmc5883l": Spec("tree", "overrides of presets/sensors/hmc5883l.toml"),
+    "sensor_models.imu_array": Spec("tree", "overrides of presets/sensors/imu_array.toml (mounting, rates, site field)"),
+    "sensor_models.zemic_l6d": Spec("tree", "overrides of presets/sensors/zemic_l6d.toml (load cells)"),
+    "sensor_models.estimation": Spec("tree", "overrides of presets/sensors/estimation.toml (calibration procedure, guards, Kalman)"),
+    "faults.events": Spec(
+        "table_list",
+        "sensor faults switched on at a time (issue 9 builds on them): IMU modules and load cells",
+        item={
+            "t": F("when the fault starts", "s", 0.0),
+            "sensor": S("which kind of sensor", ("imu", "load_cell")),
+            "index": I("module 0..4 or cell 0..3", 0, 15),
+            "mode": S("fault mode (spike: load cells only)", ("none", "stuck", "dead", "bias", "noise", "spike")),
+            "magnitude": F("bias in counts, noise as a multiple of the nominal sigma, spike in counts", "", -1e6, 1e6),
+        },
+    ),
     # --- disturbances ----------------------------------------------------------------------------
     "disturbance.wind_force": V3("constant wind force on the body (world ENU), enters Eq. 1", "N", -1e3, 1e3),
     "disturbance.gusts": Spec(

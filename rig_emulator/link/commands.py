@@ -59,7 +59,7 @@ def _arm(cmd, srv, channel):
     if flag not in (0.0, 1.0):
         return DENIED, []
     srv.rig.arm(flag == 1.0)
-    srv.broadcast_heartbeat()
+    srv.heartbeat_pending = True
     return ACCEPTED, []
 
 
@@ -71,7 +71,7 @@ def _set_mode(cmd, srv, channel):
     sub = cmd.int_param(3) or 0
     if not srv.modes.enter(main, sub, srv.rig):
         return UNSUPPORTED, []
-    srv.broadcast_heartbeat()
+    srv.heartbeat_pending = True
     return ACCEPTED, []
 
 
@@ -115,8 +115,7 @@ def _shock(cmd, srv, channel):
     try:
         srv.rig.apply_shock(arm, torque, duration)
     except ValueError as exc:
-        srv.statustext(channel, M.MAV_SEVERITY_WARNING, f"shock rejected: {exc}")
-        return DENIED, []
+        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"shock rejected: {exc}")
     return ACCEPTED, []
 
 
@@ -127,8 +126,7 @@ def _extra_mass(cmd, srv, channel):
     try:
         srv.rig.set_extra_mass(arm, mass, distance)
     except ValueError as exc:
-        srv.statustext(channel, M.MAV_SEVERITY_WARNING, f"extra mass rejected: {exc}")
-        return DENIED, []
+        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"extra mass rejected: {exc}")
     return ACCEPTED, []
 
 

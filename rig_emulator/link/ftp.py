@@ -22,7 +22,7 @@ HEADER = struct.Struct("<HBBBBBBI")
 PAYLOAD_LEN = 251
 
 
-def nak_for(msg, sysid: int, compid_from: int):
+def nak_for(msg):
     """The FILE_TRANSFER_PROTOCOL NAK answering ``msg``, or None if its payload is unreadable."""
     payload = bytes(msg.payload)
     if len(payload) < HEADER.size:
@@ -33,5 +33,5 @@ def nak_for(msg, sysid: int, compid_from: int):
         error = ERR_FAIL
     reply = HEADER.pack((seq + 1) % 65536, session, OP_NAK, 1, opcode, 0, 0, 0) + bytes([error])
     return M.MAVLink_file_transfer_protocol_message(
-        target_network=0, target_system=sysid, target_component=compid_from,
+        target_network=0, target_system=msg.get_srcSystem(), target_component=msg.get_srcComponent(),
         payload=list(reply.ljust(PAYLOAD_LEN, b"\0")))

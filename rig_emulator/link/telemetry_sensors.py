@@ -80,5 +80,5 @@ def named_value_float(snap, ctx):
     """HILMS_LOAD_CELLS for stock ground stations: filtered thrust per arm (N) as LC1_N..LC4_N."""
     r = ctx.readings(snap)
     t = U.time_boot_ms(snap.time_s)
-    return [mavlink.MAVLink_named_value_float_message(time_boot_ms=t, name=name, value=float(f))
+    return [mavlink.MAVLink_named_value_float_message(time_boot_ms=t, name=name.encode("ascii"), value=float(f))
             for name, f in zip(LOAD_CELL_NAMES, r.load_thrust_n)]

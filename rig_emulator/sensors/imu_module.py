@@ -60,7 +60,7 @@ ImuKernel = namedtuple(
         "err_matrix",      # (n, 3, 3, 3) A_s per module and sensor
         "offset",          # (n, 3, 3) turn-on offset / hard iron, SI (rad/s, m/s^2, T)
         "noise_sigma",     # (3,) white noise per sample, SI
-        "walk_sigma",      # (3,) bias random-walk increment per sample of that sensor, SI
+        "walk_sigma",      # (3,) bias random-walk increment per magnetometer period, SI
         "lsb",             # (3,) SI per count
         "count_min",       # (3,)
         "count_max",       # (3,)
@@ -194,7 +194,9 @@ def draw_imu_modules(cfg: dict, rng: np.random.Generator, physics_dt_s: float = 
         err_matrix=np.ascontiguousarray(A),
         offset=np.ascontiguousarray(offset),
         noise_sigma=sc["noise_sigma"],
-        walk_sigma=sc["walk_density"] * np.sqrt([dt_inertial, dt_inertial, dt_mag]),
+        # Reading: every bias random walk steps at the magnetometer period (the slowest sensor),
+        # with the increment sized for that period: the same walk statistics for a third of the draws.
+        walk_sigma=sc["walk_density"] * np.sqrt(dt_mag),
         lsb=sc["lsb"],
         count_min=sc["count_min"],
         count_max=sc["count_max"],
@@ -205,14 +207,14 @@ def draw_imu_modules(cfg: dict, rng: np.random.Generator, physics_dt_s: float = 
 
 
 @jit(inline="always")
-def _emit(A, offset, walk, sig, wsig, lsb, lo, hi, m, s, x0, x1, x2, mode, magnitude, rng, raw_out):
+def _emit(A, offset, walk, sig, inv_lsb, lo, hi, m, s, x0, x1, x2, mode, magnitude, rng, raw_out):
     """One sensor triad of module ``m``: error model, noise, ADC, fault, into raw_out."""
     for i in range(3):
         y = (A[m, s, i, 0] * x0 + A[m, s, i, 1] * x1 + A[m, s, i, 2] * x2
              + offset[m, s, i] + walk[m, s, i] + sig * rng.standard_normal())
         if mode == FAULT_NOISE:
             y += magnitude * sig * rng.standard_normal()
-        c = math.floor(y / lsb + 0.5)
+        c = math.floor(y * inv_lsb + 0.5)
         if mode == FAULT_BIAS:
             c += magnitude
         if mode == FAULT_DEAD:
@@ -222,8 +224,6 @@ def _emit(A, offset, walk, sig, wsig, lsb, lo, hi, m, s, x0, x1, x2, mode, magni
         elif c > hi:
             c = hi
         raw_out[m, 3 * s + i] = c
-        if wsig > 0.0:
-            walk[m, s, i] += wsig * rng.standard_normal()
 
 
 @jit
@@ -273,7 +273,15 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
     lsb = k.lsb
     lo = k.count_min
     hi = k.count_max
+    inv0 = 1.0 / lsb[0]
+    inv1 = 1.0 / lsb[1]
+    inv2 = 1.0 / lsb[2]
     for m in range(k.n_modules):
+        if do_mag:  # bias random walk of all three sensors, at the magnetometer period
+            for s in range(3):
+                if wsig[s] > 0.0:
+                    for i in range(3):
+                        walk[m, s, i] += wsig[s] * rng.standard_normal()
         mode = fault_mode[m]
         if mode == FAULT_STUCK:
             continue
@@ -289,10 +297,10 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
             fx = gbx + (wy * cz - wz * cy) + (ay_ * pz - az_ * py)
             fy = gby + (wz * cx - wx * cz) + (az_ * px - ax_ * pz)
             fz = gbz + (wx * cy - wy * cx) + (ax_ * py - ay_ * px)
-            _emit(A, off, walk, sig[0], wsig[0], lsb[0], lo[0], hi[0], m, 0, wx, wy, wz, mode, magnitude,
+            _emit(A, off, walk, sig[0], inv0, lo[0], hi[0], m, 0, wx, wy, wz, mode, magnitude,
                   rng, raw_out)
-            _emit(A, off, walk, sig[1], wsig[1], lsb[1], lo[1], hi[1], m, 1, fx, fy, fz, mode, magnitude,
+            _emit(A, off, walk, sig[1], inv1, lo[1], hi[1], m, 1, fx, fy, fz, mode, magnitude,
                   rng, raw_out)
         if do_mag:
-            _emit(A, off, walk, sig[2], wsig[2], lsb[2], lo[2], hi[2], m, 2, mbx, mby, mbz, mode, magnitude,
+            _emit(A, off, walk, sig[2], inv2, lo[2], hi[2], m, 2, mbx, mby, mbz, mode, magnitude,
                   rng, raw_out)

@@ -1,9 +1,9 @@
 """Columns of the time series the step loop records (one row per log period)."""
 
 T = 0
-POS = 1  # 3: virtual position, world ENU (m)
+POS = 1  # 3: virtual position the controllers used, world ENU (m): the rig's own (Eq. 1 from its sensors) or the true one
 VEL = 4  # 3: virtual velocity (m/s)
-EULER = 7  # 3: phi, theta, psi (rad)
+EULER = 7  # 3: phi, theta, psi the controllers used (estimated or true, rad)
 OMEGA = 10  # 3: body rates omega_B (rad/s)
 POS_DES = 13  # 3: desired position (NaN in attitude mode)
 VEL_DES = 16  # 3
@@ -18,7 +18,11 @@ EULER_RATE = 39  # 3
 EULER_RATE_DES = 42  # 3
 MODE = 45  # 0 position, 1 attitude
 UXY = 46  # 2: virtual inputs uX, uY (Eq. 34)
-NCOLS = 48
+POS_TRUE = 48  # 3: physics position (POS is what the controllers were fed)
+EULER_TRUE = 51  # 3: physics attitude (EULER is what the controllers were fed)
+THRUST_MEAS = 54  # 4: filtered load-cell thrusts (N)
+HEALTH = 58  # 2: rejected IMU modules mask, rejected load cells mask
+NCOLS = 60
 
 NAMES = {
     "t": (T, 1),
@@ -39,4 +43,8 @@ NAMES = {
     "euler_rate_des": (EULER_RATE_DES, 3),
     "mode": (MODE, 1),
     "uxy": (UXY, 2),
+    "pos_true": (POS_TRUE, 3),
+    "euler_true": (EULER_TRUE, 3),
+    "thrust_meas": (THRUST_MEAS, 4),
+    "health": (HEALTH, 2),
 }

@@ -1,31 +1,55 @@
-"""The compiled step loop: guidance -> control -> actuators -> physics, one physics step at a time.
+"""The compiled step loop: physics -> sensors -> estimation -> control -> actuators -> physics.
 
 ``run_steps`` advances the rig by ``n_steps`` physics steps starting at step ``k_start``
-(time = k dt exactly, no accumulated rounding). Control runs every ``ctrl_div`` steps with
-a zero-order hold on the motor commands; a log row is written every ``log_div`` steps.
-It can be called repeatedly on the same arrays: a headless run calls it once, the MAVLink
-rig calls it in chunks between link services.
+(time = k dt exactly, no accumulated rounding). Each step the sensors due at that step
+are sampled from the current state and the estimators take them in; every ``ctrl_div``
+steps guidance and control run on the feedback the config selects (the rig's estimates,
+as on the hardware, or the true state) with a zero-order hold on the motor commands; a
+log row is written every ``log_div`` steps. It can be called repeatedly on the same
+arrays: a headless run calls it once, the MAVLink rig calls it in chunks.
+
+Reading: the accelerometers' lever-arm term uses the angular acceleration of the
+previous step's first RK4 stage.
 """
 
 from rig_emulator._jit import jit
 from rig_emulator.control.controller import (
+    CS_STARTED,
     OUT_ATT_DES,
     OUT_ATT_RATE_DES,
     OUT_FLAGS,
     OUT_S,
     OUT_U,
     OUT_UXY,
-    CS_STARTED,
     REF_MODE,
     REF_POS,
     REF_VEL,
     control_update,
 )
+from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
+from rig_emulator.estimation.load_cell_filter import load_cell_filter_step
+from rig_emulator.estimation.onboard_position import onboard_translation_step
 from rig_emulator.guidance.runner import GS_INDEX, guidance_update
+from rig_emulator.physics.disturbances import wind_force
 from rig_emulator.physics.integrator import rk4_step
-from rig_emulator.physics.motors import thrust_from_voltage
+from rig_emulator.physics.motors import rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates
+from rig_emulator.sensors.sensor_step import SAMPLED_CELLS, sensors_step
 from rig_emulator.simulation import log_layout as L
+
+
+@jit
+def _sense(k, x, pp, sp, ss, rng, omega_dot):
+    """Sample the sensors due at step k and run the estimators on them."""
+    for i in range(4):
+        f = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        ss.thrust_true[i] = f
+        ss.rotor_speed[i] = rotor_speed(f, pp.kf)
+    mask = sensors_step(k, x[6:10], x[10:13], omega_dot, ss.thrust_true, ss.rotor_speed,
+                        sp.suite, ss.sstate, rng, ss.imu_raw, ss.cell_raw)
+    ss.health[0] = attitude_estimation_step(mask, ss.imu_raw, sp.chain, ss.awork, ss.att_est)
+    if mask & SAMPLED_CELLS:
+        ss.health[1] = load_cell_filter_step(ss.cell_raw, sp.lcp, ss.lcs, ss.thrust_est)
 
 
 @jit
@@ -33,6 +57,7 @@ def run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
+    sp, ss, rng,
 ):
     """Advance the rig; returns the next free log row.
 
@@ -40,49 +65,93 @@ def run_steps(
     starts afresh on arming.
     """
     ctrl_dt = dt * ctrl_div
+    phi = 0.0
+    theta = 0.0
+    psi = 0.0
     for k in range(k_start, k_start + n_steps):
         t = k * dt
+        if sp.simulate:
+            _sense(k, x, pp, sp, ss, rng, work[0, 10:13])
         if not armed:
             for i in range(4):
                 v_cmd[i] = 0.0
             cstate[CS_STARTED] = 0.0
-        elif k % ctrl_div == 0:
-            phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
-            dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, x[10], x[11], x[12])
-            guidance_update(t, x[0:3], gp, gstate, reached_t, ref)
-            control_update(
-                ctrl_dt, x[0:3], x[3:6], phi, theta, psi, dphi, dtheta, dpsi, x[10], x[11], x[12],
-                ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
-            )
+        if k % ctrl_div == 0:
+            if sp.simulate:
+                fwx, fwy, fwz = wind_force(t, wind, gusts)
+                u1_meas = ss.thrust_est[0] + ss.thrust_est[1] + ss.thrust_est[2] + ss.thrust_est[3]
+                onboard_translation_step(ctrl_dt, ss.att_est[0], ss.att_est[1], ss.att_est[2], u1_meas,
+                                         pp.mass, pp.g, fwx, fwy, fwz, pp.ground, ss.onboard)
+            if sp.estimated:
+                phi = ss.att_est[0]
+                theta = ss.att_est[1]
+                psi = ss.att_est[2]
+                dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, ss.att_est[3], ss.att_est[4], ss.att_est[5])
+                pos = ss.onboard[0:3]
+                vel = ss.onboard[3:6]
+                wx = ss.att_est[3]
+                wy = ss.att_est[4]
+                wz = ss.att_est[5]
+            else:
+                phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
+                dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, x[10], x[11], x[12])
+                pos = x[0:3]
+                vel = x[3:6]
+                wx = x[10]
+                wy = x[11]
+                wz = x[12]
+            if armed:
+                guidance_update(t, pos, gp, gstate, reached_t, ref)
+                control_update(
+                    ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
+                    ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
+                )
         if k % log_div == 0 and log_row < log.shape[0]:
-            row = log[log_row]
-            phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
-            dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, x[10], x[11], x[12])
-            row[L.T] = t
-            for i in range(3):
-                row[L.POS + i] = x[i]
-                row[L.VEL + i] = x[3 + i]
-                row[L.OMEGA + i] = x[10 + i]
-                row[L.POS_DES + i] = ref[REF_POS + i]
-                row[L.VEL_DES + i] = ref[REF_VEL + i]
-                row[L.EULER_DES + i] = cout[OUT_ATT_DES + i]
-                row[L.EULER_RATE_DES + i] = cout[OUT_ATT_RATE_DES + i]
-                row[L.S + i] = cout[OUT_S + i]
-            row[L.EULER] = phi
-            row[L.EULER + 1] = theta
-            row[L.EULER + 2] = psi
-            row[L.EULER_RATE] = dphi
-            row[L.EULER_RATE + 1] = dtheta
-            row[L.EULER_RATE + 2] = dpsi
-            for i in range(4):
-                row[L.THRUST + i] = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
-                row[L.V_CMD + i] = v_cmd[i]
-                row[L.U + i] = cout[OUT_U + i]
-            row[L.FLAGS] = cout[OUT_FLAGS]
-            row[L.WAYPOINT] = gstate[GS_INDEX]
-            row[L.MODE] = ref[REF_MODE]
-            row[L.UXY] = cout[OUT_UXY]
-            row[L.UXY + 1] = cout[OUT_UXY + 1]
+            _log_row(log[log_row], t, x, pp, sp, ss, ref, cout, gstate, v_cmd)
             log_row += 1
         rk4_step(t, dt, x, v_cmd, pp, wind, gusts, shocks, extra, work, R)
     return log_row
+
+
+@jit
+def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd):
+    phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
+    row[L.T] = t
+    row[L.EULER_TRUE] = phi
+    row[L.EULER_TRUE + 1] = theta
+    row[L.EULER_TRUE + 2] = psi
+    if sp.estimated:
+        phi = ss.att_est[0]
+        theta = ss.att_est[1]
+        psi = ss.att_est[2]
+        dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, ss.att_est[3], ss.att_est[4], ss.att_est[5])
+    else:
+        dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, x[10], x[11], x[12])
+    for i in range(3):
+        row[L.POS + i] = ss.onboard[i] if sp.estimated else x[i]
+        row[L.VEL + i] = ss.onboard[3 + i] if sp.estimated else x[3 + i]
+        row[L.POS_TRUE + i] = x[i]
+        row[L.OMEGA + i] = x[10 + i]
+        row[L.POS_DES + i] = ref[REF_POS + i]
+        row[L.VEL_DES + i] = ref[REF_VEL + i]
+        row[L.EULER_DES + i] = cout[OUT_ATT_DES + i]
+        row[L.EULER_RATE_DES + i] = cout[OUT_ATT_RATE_DES + i]
+        row[L.S + i] = cout[OUT_S + i]
+    row[L.EULER] = phi
+    row[L.EULER + 1] = theta
+    row[L.EULER + 2] = psi
+    row[L.EULER_RATE] = dphi
+    row[L.EULER_RATE + 1] = dtheta
+    row[L.EULER_RATE + 2] = dpsi
+    for i in range(4):
+        row[L.THRUST + i] = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        row[L.V_CMD + i] = v_cmd[i]
+        row[L.U + i] = cout[OUT_U + i]
+        row[L.THRUST_MEAS + i] = ss.thrust_est[i] if sp.simulate else row[L.THRUST + i]
+    row[L.FLAGS] = cout[OUT_FLAGS]
+    row[L.WAYPOINT] = gstate[GS_INDEX]
+    row[L.MODE] = ref[REF_MODE]
+    row[L.UXY] = cout[OUT_UXY]
+    row[L.UXY + 1] = cout[OUT_UXY + 1]
+    row[L.HEALTH] = ss.health[0]
+    row[L.HEALTH + 1] = ss.health[1]

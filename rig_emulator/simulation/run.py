@@ -17,6 +17,8 @@ from rig_emulator.physics.motors import voltage_for_thrust
 from rig_emulator.physics.rotation import quat_from_euler
 from rig_emulator.simulation import log_layout as L
 from rig_emulator.simulation.loop import run_steps
+from rig_emulator.sensors.faults import set_fault
+from rig_emulator.simulation.sensing import Sensing
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 
 
@@ -61,10 +63,12 @@ class Simulation:
         self.cp = control_params(cfg)
         self.gp = guidance_params(cfg)
         self.dist = disturbances(cfg)
+        self.sensing = Sensing(cfg, self.dt, np.random.SeedSequence(cfg["sim.seed"]))
         self.x = np.zeros(S.SIZE)
         self.x[S.POS : S.POS + 3] = cfg["initial.position"]
         phi, theta, psi = (math.radians(a) for a in cfg["initial.euler_deg"])
         quat_from_euler(phi, theta, psi, self.x[S.QUAT : S.QUAT + 4])
+        self.sensing.state.onboard[0:3] = cfg["initial.position"]
         hover_v = voltage_for_thrust(self.pp.mass * self.pp.g / 4.0, self.pp.k_v, self.pp.v_max)
         self.x[S.MOTOR_V : S.MOTOR_V + 4] = hover_v
         self.v_cmd = np.full(4, hover_v)
@@ -96,22 +100,44 @@ class Simulation:
             self.x, self.v_cmd, self.pp, self.cp, self.gp, d.wind, d.gusts, d.shocks, d.extra,
             self.cstate, self.gstate, self.reached_t, self.ref, self.cout, self.scratch, self.work, self.R,
             self.log, self.log_row, self.armed,
+            self.sensing.params, self.sensing.state, self.sensing.run_rng,
         )
         self.k += n_steps
 
     def warm_up(self) -> float:
-        """Compile (or load from cache) the loop on a throw-away copy; returns the seconds it took."""
+        """Compile (or load from cache) the loop without advancing it; returns the seconds it took."""
         t0 = time.perf_counter()
-        probe = Simulation(self.cfg, log_capacity=2)
-        probe.advance(2 * self.ctrl_div)
+        self.advance(0)
         return time.perf_counter() - t0
 
+    def set_sensor_fault(self, sensor: str, index: int, mode: str, magnitude: float = 0.0) -> None:
+        """Switch an IMU module (``sensor='imu'``) or a load cell (``'load_cell'``) to a fault mode."""
+        st = self.sensing.state.sstate
+        if sensor == "imu":
+            set_fault(st.imu_fault_mode, st.imu_fault_magnitude, index, mode, magnitude, imu=True)
+        elif sensor == "load_cell":
+            set_fault(st.cell_fault_mode, st.cell_fault_magnitude, index, mode, magnitude, imu=False)
+        else:
+            raise ValueError(f"sensor {sensor!r}: must be 'imu' or 'load_cell'")
+
     def run(self, duration: float | None = None) -> SimResult:
-        """Run the whole configured duration (or ``duration``) headless, as fast as possible."""
+        """Run the whole configured duration (or ``duration``) headless, as fast as possible.
+
+        The configured ``faults.events`` are switched on at their times (the run is advanced
+        in pieces between them, which changes nothing else).
+        """
         self.warm_up()
         n_steps = int(round((self.cfg["sim.duration"] if duration is None else duration) / self.dt))
+        events = sorted(self.cfg["faults.events"], key=lambda e: e["t"])
         t0 = time.perf_counter()
-        self.advance(n_steps)
+        done = 0
+        for event in events:
+            k_event = min(n_steps, int(math.ceil(event["t"] / self.dt - 1e-9)))
+            if k_event > done:
+                self.advance(k_event - done)
+                done = k_event
+            self.set_sensor_fault(event["sensor"], event["index"], event["mode"], event["magnitude"])
+        self.advance(n_steps - done)
         wall = time.perf_counter() - t0
         return SimResult(
             config=self.cfg,

@@ -6,7 +6,7 @@ from rig_emulator.api import simulate
 
 
 def test_sliding_condition_after_a_shock():
-    r = simulate("hover-shocks", strategy="smc", duration=5.0, overrides={"sim.log_rate_hz": 500.0})
+    r = simulate("hover-shocks", strategy="smc", duration=5.0, overrides={"sim.log_rate_hz": 500.0, "sensors.feedback": "ideal"})
     t, s = r.series["t"], r.series["s"][:, 1]  # the first shock (arm 1) drives theta
     k_theta = r.config["smc.k"][1]
     after = t >= 3.06  # shock on arm 1 from 3.00 to 3.05 s

@@ -1,0 +1,28 @@
+"""The rig's own virtual translation: Eq. 1 integrated from what its sensors say.
+
+On the HILMS the translation is never measured: the onboard computer integrates Eq. 1
+from the filtered load-cell thrusts and the estimated attitude (Sec. 4-1). The
+disturbance forces of Eq. 1 are software inputs of the rig, so they enter here as they
+do in the physics. Semi-implicit Euler at the control period; the virtual ground (if on)
+applies as in the physics.
+"""
+
+from rig_emulator._jit import jit
+from rig_emulator.control.thrust_direction import thrust_direction
+
+
+@jit
+def onboard_translation_step(dt, phi, theta, psi, u1, mass, g, fwx, fwy, fwz, ground, state):
+    """Advance ``state`` = (position 0:3, velocity 3:6) by ``dt`` (world ENU)."""
+    ux, uy, uz = thrust_direction(phi, theta, psi)
+    inv_m = 1.0 / mass
+    state[3] += (ux * u1 + fwx) * inv_m * dt
+    state[4] += (uy * u1 + fwy) * inv_m * dt
+    state[5] += ((uz * u1 + fwz) * inv_m - g) * dt
+    state[0] += state[3] * dt
+    state[1] += state[4] * dt
+    state[2] += state[5] * dt
+    if ground and state[2] <= 0.0:
+        state[2] = 0.0
+        if state[5] < 0.0:
+            state[5] = 0.0

@@ -1,0 +1,56 @@
+"""``rig-emulator serve`` (also plain ``rig-emulator``): the rig on MAVLink.
+
+Defaults follow SITL conventions: ``udpout:127.0.0.1:14550`` (QGroundControl picks the rig
+up with no configuration) and ``tcpin:127.0.0.1:5760`` (scripts, MAVProxy). Repeat
+``--mavlink`` to choose the endpoints instead. ``--speedup 1`` is real time, larger is
+faster, ``0`` or ``max`` runs as fast as possible. SIGINT/SIGTERM stop the rig cleanly
+(exit 0). On start one line per endpoint is printed, ``rig-emulator: serving URL`` with
+the bound port, so scripts can bind port 0 and read the port back.
+"""
+
+from __future__ import annotations
+
+import signal
+
+from rig_emulator.config.loader import ConfigError, load_config
+from rig_emulator.link.endpoints import EndpointError
+from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
+from rig_emulator.link.server import RigServer
+from rig_emulator.simulation.live import LiveRig
+
+
+def prepare_rig(cfg) -> LiveRig:
+    """A disarmed rig, compiled, holding its initial position (arming makes it hover there)."""
+    rig = LiveRig(cfg)
+    rig.warm_up()
+    rig.set_position_target(list(cfg["initial.position"]))
+    return rig
+
+
+def cmd_serve(args, overrides: dict) -> int:
+    if not 1 <= args.sysid <= 255:
+        raise ConfigError(f"--sysid {args.sysid}: must be 1..255")
+    if args.duration is not None and not args.duration > 0:
+        raise ConfigError(f"--duration {args.duration}: must be > 0")
+    if not 0.1 <= args.chunk_ms <= 100.0:
+        raise ConfigError(f"--chunk-ms {args.chunk_ms}: must be in [0.1, 100]")
+    cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
+    rig = prepare_rig(cfg)
+    try:
+        server = RigServer(rig, args.mavlink or list(DEFAULT_ENDPOINTS), sysid=args.sysid, home=args.home,
+                           speedup=args.speedup, chunk_s=args.chunk_ms / 1000.0)
+    except EndpointError as exc:
+        raise ConfigError(str(exc)) from exc
+    previous = {s: signal.signal(s, lambda *_: server.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        for url in server.urls:
+            print(f"rig-emulator: serving {url}", flush=True)
+        server.run(args.duration)
+    finally:
+        server.close()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    c = server.counters
+    print(f"rig-emulator: stopped at t = {rig.time_s:.3f} s; received {c.received}, sent {c.sent}, "
+          f"dropped {dict(c.dropped)}", flush=True)
+    return 0

@@ -1,0 +1,44 @@
+"""Command-line options of ``rig-emulator serve`` (kept light: no physics imports)."""
+
+from __future__ import annotations
+
+import argparse
+
+from protocol.geodesy import Home
+
+DEFAULT_ENDPOINTS = ("udpout:127.0.0.1:14550", "tcpin:127.0.0.1:5760")
+#: Reading: the rig's site, matching the earth field of imu_array.toml (Tehran-like, 35.7 N 51.4 E).
+DEFAULT_HOME = "35.7,51.4,1200"
+
+
+def parse_home(text: str) -> Home:
+    try:
+        lat, lon, alt = (float(v) for v in text.split(","))
+        return Home(lat, lon, alt)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"--home {text!r}: expected LAT,LON,ALT in degrees and metres ({exc})")
+
+
+def parse_speedup(text: str) -> float:
+    if text.strip().lower() == "max":
+        return 0.0
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not value >= 0.0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"--speedup {text!r}: expected a number >= 0 or 'max'")
+    return value
+
+
+def add_serve_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--mavlink", action="append", default=[], metavar="URL",
+                   help="endpoint as a mavutil connection string (repeatable); default: " + " and ".join(DEFAULT_ENDPOINTS))
+    p.add_argument("--scenario", help="scenario preset whose parameters the rig starts with")
+    p.add_argument("--sysid", type=int, default=1, help="MAVLink system id (default %(default)s)")
+    p.add_argument("--home", type=parse_home, default=parse_home(DEFAULT_HOME), metavar="LAT,LON,ALT",
+                   help="geodetic position of the local origin (default %s)" % DEFAULT_HOME)
+    p.add_argument("--speedup", type=parse_speedup, default=1.0, metavar="X",
+                   help="simulated seconds per wall second; 0 or 'max' = as fast as possible (default 1)")
+    p.add_argument("--duration", type=float, help="stop after this many simulated seconds (default: run until a signal)")
+    p.add_argument("--chunk-ms", type=float, default=5.0, help="simulated time per physics chunk (default %(default)s)")

@@ -1,0 +1,289 @@
+"""The MAVLink rig: a :class:`LiveRig` served on one or more endpoints.
+
+The loop advances the physics in chunks (:attr:`RigServer.chunk_steps` steps, 5 ms of
+simulated time by default) and services the link between chunks: it reads every endpoint,
+handles each message at once (every command is ACKed before the next chunk), sends the
+streams that are due in simulated time, and sends HEARTBEAT at 1 Hz of wall-clock time.
+With ``speedup`` > 0 the simulated clock is paced against ``time.monotonic()`` scaled by
+the speed-up (1 = real time); with ``speedup`` = 0 the rig runs as fast as it can. When
+the host cannot keep up the pacing re-anchors instead of bursting (counted in
+``overruns``).
+
+Bad input never stops the loop: unparsable bytes, bad CRCs, messages for other systems and
+unusable fields are counted in :attr:`RigServer.counters` and dropped.
+"""
+
+from __future__ import annotations
+
+import math
+import select
+import time
+
+from protocol.dialect import mavlink as M
+from protocol.geodesy import Home
+from rig_emulator.link import offboard, telemetry_status
+from rig_emulator.link.channel import Channel
+from rig_emulator.link.commands import Command, execute
+from rig_emulator.link.counters import LinkCounters
+from rig_emulator.link.endpoints import open_endpoint
+from rig_emulator.link.ftp import nak_for
+from rig_emulator.link.ideal_sensors import load_sensor_model
+from rig_emulator.link.modes import FlightModes
+from rig_emulator.link.param_service import ParamService
+from rig_emulator.link.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
+from rig_emulator.link.streams import StreamSchedule
+from rig_emulator.link.telemetry_context import TelemetryContext
+
+COMPID = M.MAV_COMP_ID_AUTOPILOT1
+HEARTBEAT_PERIOD_S = 1.0
+MAX_LAG_S = 0.25  # further behind real time than this: re-anchor the pacing
+STATUSTEXT_LEN = 50
+
+
+class RigServer:
+    def __init__(self, rig, endpoints: list[str], sysid: int = 1, home: Home | None = None,
+                 speedup: float = 1.0, chunk_s: float = 0.005):
+        if not 1 <= sysid <= 255:
+            raise ValueError(f"sysid {sysid}: must be 1..255")
+        if not (speedup >= 0.0 and math.isfinite(speedup)):
+            raise ValueError(f"speedup {speedup}: must be >= 0 (0 = as fast as possible)")
+        self.rig = rig
+        self.sysid = sysid
+        self.speedup = speedup
+        self.chunk_steps = max(1, int(round(chunk_s / rig.dt)))
+        self.chunk_s = self.chunk_steps * rig.dt
+        self.counters = LinkCounters()
+        self.modes = FlightModes()
+        self.ctx = TelemetryContext(rig=rig, home=home or Home(35.7, 51.4, 1200.0), sensors=load_sensor_model(),
+                                    modes=self.modes, counters=self.counters, sysid=sysid)
+        self.params = ParamService(rig, self)
+        self.endpoints = []
+        try:
+            for spec in endpoints:
+                self.endpoints.append(open_endpoint(spec))
+        except Exception:
+            self.close()
+            raise
+        self.channels: dict[tuple, Channel] = {}
+        self.overruns = 0
+        self.heartbeat_pending = False
+        self._stop = False
+        self._snap = None
+        self._statustext_id = 0
+        self._next_heartbeat = 0.0
+        self._handlers = {
+            "HEARTBEAT": lambda msg, ch: None,
+            "PARAM_REQUEST_LIST": self.params.request_list,
+            "PARAM_REQUEST_READ": self.params.request_read,
+            "PARAM_SET": self.params.set,
+            "COMMAND_LONG": lambda msg, ch: self._command(Command.from_long(msg), ch),
+            "COMMAND_INT": lambda msg, ch: self._command(Command.from_int(msg), ch),
+            "REQUEST_DATA_STREAM": self._request_data_stream,
+            "SET_POSITION_TARGET_LOCAL_NED": lambda msg, ch: self._setpoint(offboard.apply_position_target, msg),
+            "SET_ATTITUDE_TARGET": lambda msg, ch: self._setpoint(offboard.apply_attitude_target, msg),
+            "TIMESYNC": self._timesync,
+            "FILE_TRANSFER_PROTOCOL": self._ftp,
+        }
+
+    # --- what tests and tools read ---------------------------------------------------------
+    @property
+    def urls(self) -> list[str]:
+        """Connection strings of the endpoints with their bound ports."""
+        return [ep.url for ep in self.endpoints]
+
+    # --- sending -------------------------------------------------------------------------------
+    def snapshot(self):
+        if self._snap is None:
+            self._snap = self.rig.snapshot()
+        return self._snap
+
+    def reply(self, channel: Channel, msg) -> None:
+        channel.send(msg)
+
+    def broadcast(self, msg) -> None:
+        for ch in list(self.channels.values()):
+            ch.send(msg)
+
+    def statustext_messages(self, severity: int, text: str) -> list:
+        """STATUSTEXT message(s) for ``text``, split into 50-character chunks."""
+        data = text.encode("ascii", "replace")
+        chunks = [data[i : i + STATUSTEXT_LEN] for i in range(0, len(data), STATUSTEXT_LEN)] or [b""]
+        if len(chunks) > 1 and len(chunks[-1]) == STATUSTEXT_LEN:
+            chunks.append(b"")
+        msg_id = 0
+        if len(chunks) > 1:
+            self._statustext_id = self._statustext_id % 65535 + 1
+            msg_id = self._statustext_id
+        return [M.MAVLink_statustext_message(severity=severity, text=chunk, id=msg_id, chunk_seq=seq)
+                for seq, chunk in enumerate(chunks)]
+
+    def statustext(self, channel: Channel | None, severity: int, text: str) -> None:
+        """STATUSTEXT to one peer (or all with ``None``)."""
+        for msg in self.statustext_messages(severity, text):
+            self.broadcast(msg) if channel is None else channel.send(msg)
+
+    def broadcast_heartbeat(self) -> None:
+        self.broadcast(telemetry_status.heartbeat(self.rig.snapshot(), self.ctx))
+
+    def build(self, msg_id: int) -> list:
+        """The message(s) ``msg_id`` for the current state (MAV_CMD_REQUEST_MESSAGE)."""
+        self._snap = None
+        out = ON_REQUEST[msg_id](self.snapshot(), self.ctx)
+        return out if isinstance(out, list) else [out]
+
+    # --- receiving ------------------------------------------------------------------------------
+    def service_io(self) -> None:
+        """Read every endpoint, handle what arrived, push queued bytes."""
+        for ep in self.endpoints:
+            for event, key, data in ep.poll():
+                ck = (id(ep), key)
+                if event == "open":
+                    sched = StreamSchedule(default_rates(), self.chunk_s)
+                    self.channels[ck] = Channel(ep, key, self.sysid, COMPID, self.counters, sched)
+                    self.channels[ck].send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
+                elif event == "closed":
+                    self.channels.pop(ck, None)
+                elif ck in self.channels:
+                    channel = self.channels[ck]
+                    for msg in channel.receive(data):
+                        self.handle(msg, channel)
+            ep.flush()
+        if any(ep.dropped_peers for ep in self.endpoints):
+            for ep in self.endpoints:
+                self.counters.drop("peer_limit", ep.dropped_peers)
+                ep.dropped_peers = 0
+
+    def handle(self, msg, channel: Channel) -> None:
+        """Act on one decoded message from ``channel`` (or count why not)."""
+        if msg.get_srcSystem() == self.sysid and msg.get_srcComponent() == COMPID:
+            self.counters.drop("own_echo")
+            return
+        target = getattr(msg, "target_system", 0)
+        if target not in (0, self.sysid):
+            self.counters.drop("other_system")
+            return
+        if getattr(msg, "target_component", 0) not in (0, COMPID):
+            self.counters.drop("other_component")
+            return
+        handler = self._handlers.get(msg.get_type())
+        if handler is None:
+            self.counters.drop("unhandled")
+            return
+        try:
+            handler(msg, channel)
+        except Exception as exc:  # noqa: BLE001 - a message must never stop the rig; counted and reported
+            self.counters.drop("handler_error")
+            self.statustext(channel, M.MAV_SEVERITY_ERROR, f"{msg.get_type()} failed: {exc}")
+
+    def _command(self, cmd: Command, channel: Channel) -> None:
+        self.counters.commands += 1
+        result, follow = execute(cmd, self, channel)
+        channel.send(M.MAVLink_command_ack_message(
+            command=cmd.command, result=result, progress=0, result_param2=0,
+            target_system=0, target_component=0))
+        for msg in follow:
+            channel.send(msg)
+        if self.heartbeat_pending:
+            self.heartbeat_pending = False
+            self.broadcast_heartbeat()
+
+    def _request_data_stream(self, msg, channel: Channel) -> None:
+        hz = float(msg.req_message_rate) if msg.start_stop else 0.0
+        for msg_id in group_members(msg.req_stream_id):
+            channel.schedule.set_rate(msg_id, hz, self.rig.time_s)
+
+    def _setpoint(self, apply, msg) -> None:
+        reason = apply(msg, self.rig, self.modes)
+        if reason is not None:
+            self.counters.drop(reason)
+
+    def _timesync(self, msg, channel: Channel) -> None:
+        if msg.tc1 == 0:
+            now_ns = int(self.rig.time_s * 1e9)
+            channel.send(M.MAVLink_timesync_message(tc1=now_ns, ts1=msg.ts1))
+
+    def _ftp(self, msg, channel: Channel) -> None:
+        reply = nak_for(msg)
+        if reply is None:
+            self.counters.drop("invalid")
+        else:
+            channel.send(reply)
+
+    # --- the loop ------------------------------------------------------------------------------------
+    def step_chunk(self) -> None:
+        self.rig.step(self.chunk_steps)
+        self._snap = None
+
+    def emit_streams(self) -> None:
+        now = self.rig.time_s
+        built: dict[int, list] = {}
+        for ch in list(self.channels.values()):
+            for msg_id in ch.schedule.due(now):
+                if msg_id not in built:
+                    out = STREAMS[msg_id].build(self.snapshot(), self.ctx)
+                    built[msg_id] = out if isinstance(out, list) else [out]
+                for msg in built[msg_id]:
+                    ch.send(msg)
+
+    def _heartbeat_if_due(self, now_wall: float) -> None:
+        if now_wall >= self._next_heartbeat:
+            self.broadcast_heartbeat()
+            self._next_heartbeat = max(self._next_heartbeat + HEARTBEAT_PERIOD_S, now_wall + 0.5 * HEARTBEAT_PERIOD_S)
+
+    def _wait_io(self, timeout: float) -> None:
+        socks = [s for ep in self.endpoints for s in ep.filenos()]
+        if timeout > 0 and socks:
+            select.select(socks, [], [], timeout)
+        elif timeout > 0:
+            time.sleep(timeout)
+
+    def stop(self) -> None:
+        """Ask the loop to finish (safe from a signal handler)."""
+        self._stop = True
+
+    def run(self, duration: float | None = None) -> None:
+        """Serve until :meth:`stop` or until ``duration`` more simulated seconds have passed."""
+        t_end = math.inf if duration is None else self.rig.time_s + duration - 0.5 * self.rig.dt
+        wall0 = time.monotonic()
+        sim0 = self.rig.time_s
+        self._next_heartbeat = wall0
+        busy, window_start = 0.0, wall0
+        while not self._stop and self.rig.time_s < t_end:
+            t0 = time.monotonic()
+            self._heartbeat_if_due(t0)
+            self.service_io()
+            if self.speedup > 0.0:
+                lag = sim0 + (t0 - wall0) * self.speedup - self.rig.time_s
+                if lag < self.chunk_s:
+                    busy += time.monotonic() - t0
+                    wait = min((self.chunk_s - lag) / self.speedup, max(self._next_heartbeat - t0, 0.0))
+                    self._wait_io(wait)
+                    continue
+                if lag > MAX_LAG_S * max(self.speedup, 1.0):
+                    wall0, sim0 = t0, self.rig.time_s
+                    self.overruns += 1
+            self.step_chunk()
+            self.emit_streams()
+            for ep in self.endpoints:
+                ep.flush()
+            t1 = time.monotonic()
+            busy += t1 - t0
+            if t1 - window_start >= 1.0:
+                self.ctx.load_fraction = min(busy / (t1 - window_start), 1.0)
+                busy, window_start = 0.0, t1
+        self._drain()
+
+    def _drain(self, timeout_s: float = 0.5) -> None:
+        """Give queued TCP bytes (e.g. the last ACKs) a moment to leave before closing."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline and any(
+                getattr(c, "tx", None) for ep in self.endpoints for c in getattr(ep, "clients", {}).values()):
+            for ep in self.endpoints:
+                ep.flush()
+            time.sleep(0.005)
+
+    def close(self) -> None:
+        for ep in self.endpoints:
+            ep.close()
+        self.endpoints = []
+        self.channels = {}

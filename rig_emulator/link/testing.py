@@ -1,0 +1,227 @@
+"""Start a MAVLink rig on free ports from tests and scripts, and connect pymavlink clients.
+
+Two ways to run a rig:
+
+* :class:`RigProcess` - ``python -m rig_emulator serve`` in a subprocess (the real
+  command line; use it for signals, exit codes and external tools such as MAVProxy).
+  Endpoints bind port 0 and the rig prints the bound ports, so there is no port race::
+
+      with RigProcess(speedup=5) as rig:
+          conn = connect(rig.tcp_url)      # a pymavlink connection to the rig
+          ...
+          assert rig.stop() == 0
+
+* :class:`RigThread` - a :class:`~rig_emulator.link.server.RigServer` in a thread of the
+  test process, which exposes the server (``rig.server.counters``, ``rig.server.rig``)::
+
+      with RigThread(speedup=0) as rig:
+          conn = connect(rig.tcp_url)
+
+Client helpers: ``recv`` (next matching message), ``command`` (COMMAND_LONG -> its ACK),
+``all_params`` (the whole parameter table), ``collect`` / ``count_in_window`` /
+``stamp_s`` (count messages against their own simulated-time stamps).
+
+``connect`` opens a pymavlink ``mavutil`` connection speaking the hilms dialect over
+MAVLink 2 (client sysid 255 by default). ``udp_listener`` opens a UDP socket for a rig
+``udpout`` endpoint *before* the rig starts (pass ``extra_endpoints=[listener_url]``).
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections import defaultdict
+
+from protocol.dialect import use_hilms_dialect
+
+START_TIMEOUT_S = 60.0
+NAN = float("nan")
+
+
+def client_url(rig_url: str) -> str:
+    """The mavutil string a client uses to reach a rig endpoint URL."""
+    kind, host, port = rig_url.split(":")
+    if kind == "tcpin":
+        return f"tcp:{host}:{port}"
+    if kind in ("udpin", "udp"):
+        return f"udpout:{host}:{port}"
+    if kind == "udpout":
+        return f"udpin:{host}:{port}"
+    raise ValueError(f"{rig_url!r}: no client form for this endpoint kind")
+
+
+def connect(rig_url: str, source_system: int = 255, source_component: int = 190):
+    """A pymavlink connection (hilms dialect, MAVLink 2) to a rig endpoint URL."""
+    use_hilms_dialect()
+    from pymavlink import mavutil
+
+    return mavutil.mavlink_connection(client_url(rig_url), source_system=source_system,
+                                      source_component=source_component, autoreconnect=False)
+
+
+def udp_listener(source_system: int = 255):
+    """A client listening on a free UDP port; returns (connection, rig endpoint URL to use)."""
+    use_hilms_dialect()
+    from pymavlink import mavutil
+
+    conn = mavutil.mavlink_connection("udpin:127.0.0.1:0", source_system=source_system)
+    port = conn.port.getsockname()[1]
+    return conn, f"udpout:127.0.0.1:{port}"
+
+
+def recv(conn, types, timeout: float = 10.0, condition=None):
+    """The next message of ``types`` (str or list) satisfying ``condition``, or None after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        msg = conn.recv_match(type=types, blocking=True, timeout=min(0.2, max(deadline - time.monotonic(), 0.01)))
+        if msg is not None and (condition is None or condition(msg)):
+            return msg
+    return None
+
+
+def stamp_s(msg) -> float | None:
+    """The message's own simulated-time stamp in seconds (None if it has none)."""
+    if hasattr(msg, "time_usec"):
+        return msg.time_usec * 1e-6
+    if hasattr(msg, "time_boot_ms"):
+        return msg.time_boot_ms * 1e-3
+    return None
+
+
+def collect(conn, sim_seconds: float, guard_s: float = 60.0, clock="ATTITUDE") -> dict:
+    """Messages by type until the ``clock`` stream's stamps have advanced ``sim_seconds``."""
+    out = defaultdict(list)
+    first = None
+    deadline = time.monotonic() + guard_s
+    while time.monotonic() < deadline:
+        msg = conn.recv_match(blocking=True, timeout=0.2)
+        if msg is None:
+            continue
+        out[msg.get_type()].append(msg)
+        if msg.get_type() == clock:
+            t = stamp_s(msg)
+            first = t if first is None else first
+            if t - first >= sim_seconds:
+                break
+    return out
+
+
+def count_in_window(msgs, t0: float, t1: float) -> int:
+    return sum(1 for m in msgs if t0 <= stamp_s(m) < t1)
+
+
+def command(conn, cmd: int, *params, target=(1, 1), confirmation=0, timeout=10.0):
+    """Send a COMMAND_LONG (params padded with NaN) and return its COMMAND_ACK."""
+    p = list(params) + [NAN] * (7 - len(params))
+    conn.mav.command_long_send(target[0], target[1], cmd, confirmation, *p)
+    return recv(conn, "COMMAND_ACK", timeout, lambda m: m.command == cmd)
+
+
+def all_params(conn, timeout=10.0) -> dict:
+    """PARAM_REQUEST_LIST: {index: PARAM_VALUE} until the table is complete (or timeout)."""
+    conn.mav.param_request_list_send(1, 1)
+    got = {}
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        m = recv(conn, "PARAM_VALUE", 1.0)
+        if m is None:
+            break
+        got[m.param_index] = m
+        if len(got) == m.param_count:
+            break
+    return got
+
+
+
+class _RigBase:
+    urls: list
+
+    @property
+    def tcp_url(self) -> str:
+        return next(u for u in self.urls if u.startswith("tcpin:"))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.stop()
+
+
+class RigProcess(_RigBase):
+    """``rig-emulator serve`` as a subprocess with a tcpin endpoint on a free port."""
+
+    def __init__(self, speedup: float | str = 1.0, extra_endpoints=(), args=(), tcp: bool = True):
+        endpoints = (["tcpin:127.0.0.1:0"] if tcp else []) + list(extra_endpoints)
+        cmd = [sys.executable, "-m", "rig_emulator", "serve", "--speedup", str(speedup)]
+        for ep in endpoints:
+            cmd += ["--mavlink", ep]
+        cmd += list(args)
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        self._lines: queue.Queue = queue.Queue()
+        self.output: list[str] = []
+        threading.Thread(target=self._pump, daemon=True).start()
+        self.urls = []
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while len(self.urls) < len(endpoints):
+            try:
+                line = self._lines.get(timeout=max(deadline - time.monotonic(), 0.01))
+            except queue.Empty:
+                self.proc.kill()
+                raise RuntimeError(f"rig did not start: {self.proc.stderr.read()}") from None
+            if line is None:
+                raise RuntimeError(f"rig exited with {self.proc.wait()}: {self.proc.stderr.read()}")
+            if line.startswith("rig-emulator: serving "):
+                self.urls.append(line.split()[-1])
+
+    def _pump(self) -> None:
+        for line in self.proc.stdout:
+            self.output.append(line.rstrip("\n"))
+            self._lines.put(line.strip())
+        self._lines.put(None)
+
+    def stop(self, sig: int = signal.SIGTERM, timeout: float = 30.0) -> int:
+        """Send ``sig`` and return the exit code."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        return self.proc.returncode
+
+
+class RigThread(_RigBase):
+    """A :class:`RigServer` running in a daemon thread of this process."""
+
+    def __init__(self, speedup: float = 1.0, extra_endpoints=(), overrides=None, scenario=None, sysid: int = 1):
+        from rig_emulator.config.loader import load_config
+        from rig_emulator.link.serve import prepare_rig
+        from rig_emulator.link.server import RigServer
+
+        cfg = load_config(scenario=scenario, overrides=overrides or {})
+        self.server = RigServer(prepare_rig(cfg), ["tcpin:127.0.0.1:0", *extra_endpoints], sysid=sysid,
+                                speedup=speedup)
+        self.urls = self.server.urls
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        try:
+            self.server.run()
+        except BaseException as exc:  # noqa: BLE001 - reported to the test through self.error
+            self.error = exc
+
+    def stop(self) -> None:
+        self.server.stop()
+        self._thread.join(30.0)
+        self.server.close()
+        if self.error is not None:
+            raise self.error
