@@ -25,7 +25,6 @@ from rig_emulator.config.loader import ConfigError, available, load_config, pars
 from rig_emulator.config.schema import SCHEMA, STRATEGIES
 from rig_emulator.link.serve_args import add_serve_args
 
-SUBCOMMANDS = ("simulate", "params", "scenarios", "serve")
 
 
 def _add_config_args(p: argparse.ArgumentParser) -> None:
@@ -110,6 +109,34 @@ def cmd_serve(args) -> int:
     return serve(args, _overrides(args))
 
 
+def cmd_calibrate(args) -> int:
+    """Run the IMU calibration procedure (Sec. 4-1) on the rig of this seed and store the result."""
+    from rig_emulator.estimation.calibration_file import save_calibration
+    from rig_emulator.simulation.sensing import Sensing
+
+    overrides = _overrides(args)
+    overrides["sim.seed"] = args.seed
+    overrides["sensors.calibration"] = "levenberg-marquardt"
+    overrides["sensors.calibration_file"] = ""
+    cfg = load_config(airframe=args.airframe, files=args.config, overrides=overrides)
+    sensing = Sensing(cfg, 1.0 / cfg["sim.physics_rate_hz"], np.random.SeedSequence(cfg["sim.seed"]))
+    if args.out:
+        out = Path(args.out)
+    elif args.config:
+        first = Path(args.config[0])
+        out = first.with_name(first.stem + ".imu-calibration.json")
+    else:
+        out = Path("imu-calibration.json")
+    save_calibration(out, sensing.imu_calibration)
+    rms = sensing.imu_calibration.residual_rms
+    print(f"calibrated {rms.shape[0]} IMU modules of the rig with seed {args.seed}; written to {out}")
+    print("fit residual rms per module: gyro [deg/s], accel [m/s^2], mag [uT]")
+    for m in range(rms.shape[0]):
+        print(f"  module {m}: {math.degrees(rms[m, 0]):.4f}  {rms[m, 1]:.4f}  {rms[m, 2] * 1e6:.3f}")
+    print(f"use it with: --set sensors.calibration_file={str(out)!r}")
+    return 0
+
+
 def cmd_params(args) -> int:
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=_overrides(args))
     for key, spec in SCHEMA.items():
@@ -146,6 +173,12 @@ def build_parser() -> argparse.ArgumentParser:
     _add_config_args(p)
     p.set_defaults(func=cmd_simulate)
 
+    p = sub.add_parser("calibrate", help="run the IMU calibration procedure and store the result (Sec. 4-1)")
+    p.add_argument("--seed", type=int, default=0, help="the rig (its sensors' turn-on errors) to calibrate")
+    p.add_argument("--out", help="calibration file (default: next to the first --config, or ./imu-calibration.json)")
+    _add_config_args(p)
+    p.set_defaults(func=cmd_calibrate)
+
     p = sub.add_parser("params", help="list every parameter with its value and allowed range")
     p.add_argument("--scenario")
     _add_config_args(p)
@@ -153,13 +186,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("scenarios", help="list scenario, airframe and strategy names")
     p.set_defaults(func=cmd_scenarios)
+    parser.subcommands = tuple(sub.choices)
     return parser
 
 
 def main(argv=None) -> int:
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or (argv[0] not in SUBCOMMANDS and argv[0] not in ("-h", "--help")):
+    if not argv or (argv[0] not in parser.subcommands and argv[0] not in ("-h", "--help")):
         argv = ["serve", *argv]  # plain `rig-emulator [options]` serves MAVLink
     args = parser.parse_args(argv)
     try:

@@ -190,7 +190,12 @@ def load_config(
     if scenario is not None:
         flat.update(flatten(_preset("scenarios", scenario)))
     for path in files:
-        flat.update(flatten(_read_toml(Path(path), str(path))))
+        layer = flatten(_read_toml(Path(path), str(path)))
+        cal = layer.get("sensors.calibration_file")
+        if isinstance(cal, str) and cal and not Path(cal).is_absolute():
+            # a calibration file named in a config file sits next to that config file
+            layer["sensors.calibration_file"] = str(Path(path).resolve().parent / cal)
+        flat.update(layer)
     if overrides:
         flat.update(overrides)
     return validate(flat)

@@ -100,5 +100,13 @@ class Sensing:
                 raise ConfigError(f"sensors.calibration_file = {path!r}: holds a load-cell calibration, not an IMU one")
             if cal.arrays().gain.shape[0] != self.imu_truth.kernel.n_modules:
                 raise ConfigError(f"sensors.calibration_file = {path!r}: made for a different number of IMU modules")
+            made_for = cal.procedure.get("seed")
+            if made_for is not None and made_for != cfg["sim.seed"]:
+                raise ConfigError(
+                    f"sensors.calibration_file = {path!r}: made for the rig of seed {made_for}, this run has "
+                    f"sim.seed = {cfg['sim.seed']} (its sensors carry other turn-on errors); recalibrate"
+                )
             return cal
-        return calibrate_imu_modules(self.est_cfg, self.imu_truth, rng)
+        cal = calibrate_imu_modules(self.est_cfg, self.imu_truth, rng)
+        cal.procedure["seed"] = cfg["sim.seed"]
+        return cal

@@ -38,3 +38,15 @@ def test_params_lists_every_key():
     p = _run("params")
     assert p.returncode == 0
     assert "smc.k = [1.47, 1.47, 1.42]" in p.stdout and "flc.d1_phi_deg" in p.stdout
+
+
+def test_calibrate_then_fly_on_the_stored_calibration(tmp_path):
+    cfg = tmp_path / "run.toml"
+    cfg.write_text('[sensors]\ncalibration_file = "run.imu-calibration.json"\n')
+    p = _run("calibrate", "--seed", "5", "--config", str(cfg))
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "run.imu-calibration.json").is_file()
+    p = _run("simulate", "--scenario", "hover", "--duration", "3", "--seed", "5", "--config", str(cfg))
+    assert p.returncode == 0, p.stderr
+    p = _run("simulate", "--scenario", "hover", "--duration", "3", "--seed", "6", "--config", str(cfg))
+    assert p.returncode == 2 and "recalibrate" in p.stderr
