@@ -1,5 +1,11 @@
 """rig-core: one rig, 1 kHz physics, full controller, against RotorPy in the same run.
 
+Each scenario is measured twice: the **core** (``sensors.simulate = false``: physics,
+guidance and controllers on the true state, the figure of issue 2) and the **full-fidelity
+rig** (the default: five IMU modules with magnetometers, four load cells, calibration,
+ensemble, complementary filter, load-cell filter, onboard Eq. 1, the figure of issues 3 and
+8). Their ratio is the sensing chain's cost (issue 3: within 2x).
+
 The probe calls ``rig_emulator.api.simulate(scenario, strategy, duration, seed)`` in a
 fresh process:
 
@@ -76,7 +82,7 @@ def _check(result, duration: float) -> None:
 
 
 def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int, inner: int,
-                       _simulate: Callable | None = None) -> dict:
+                       sensors: bool = True, _simulate: Callable | None = None) -> dict:
     """Warm-up and steady-state speed of ``rig_emulator.api.simulate``.
 
     ``SimResult.mean_errors`` may be a mapping or a method returning one.
@@ -90,15 +96,16 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
     import_s = time.perf_counter() - t0
     source = _source_label() if _simulate is None else "stand-in"
 
+    kwargs = {} if sensors else {"overrides": {"sensors.simulate": False}}
     t1 = time.perf_counter()
-    first = simulate(scenario, strategy=strategy, duration=duration, seed=seed)
+    first = simulate(scenario, strategy=strategy, duration=duration, seed=seed, **kwargs)
     first_call_s = time.perf_counter() - t1
     _check(first, duration)
 
     rtfs, e2e, walls, last = [], [], [], first
     for _ in range(inner):
         t2 = time.perf_counter()
-        last = simulate(scenario, strategy=strategy, duration=duration, seed=seed)
+        last = simulate(scenario, strategy=strategy, duration=duration, seed=seed, **kwargs)
         outer = time.perf_counter() - t2
         _check(last, duration)
         rtfs.append(last.sim_time_s / last.wall_time_s)
@@ -126,30 +133,47 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
     return figs
 
 
-def _probe_name(scenario: str) -> str:
-    return f"rig-{scenario}-{STRATEGY}"
+VARIANTS = {"core": False, "full": True}  # name -> sensors simulated
+CORE_TARGETS = (Target(">=", 200.0, "issue 2"),)
+FULL_TARGETS = (Target(">=", 300.0, "issue 8"),)
+COST_TARGETS = (Target("<=", 2.0, "issue 3"),)
+
+
+def _probe_name(scenario: str, variant: str = "full") -> str:
+    return f"rig-{scenario}-{STRATEGY}-{variant}"
 
 
 for _sc in SCENARIOS:
-    REGISTRY.add_probe(
-        _probe_name(_sc), rig_simulate_probe,
-        params={"scenario": _sc, "strategy": STRATEGY, "duration": DURATION_S, "seed": 0, "inner": 3},
-        quick={"duration": QUICK_DURATION_S, "inner": 1},
-        description=f"rig_emulator.api.simulate({_sc!r}, {STRATEGY!r}), 1 kHz physics",
-    )
+    for _variant, _sensors in VARIANTS.items():
+        REGISTRY.add_probe(
+            _probe_name(_sc, _variant), rig_simulate_probe,
+            params={"scenario": _sc, "strategy": STRATEGY, "duration": DURATION_S, "seed": 0, "inner": 3,
+                    "sensors": _sensors},
+            quick={"duration": QUICK_DURATION_S, "inner": 1},
+            description=f"rig_emulator.api.simulate({_sc!r}, {STRATEGY!r}), 1 kHz physics, "
+                        + ("full sensing chain" if _sensors else "no sensor models (core)"),
+        )
 
 
-@benchmark("rig-core", probes=(ROTORPY_BARE,) + tuple(_probe_name(s) for s in SCENARIOS),
-           description="one rig, 1 kHz physics, smc-flc, hover and helix; vs RotorPy in the same run")
+@benchmark("rig-core",
+           probes=(ROTORPY_BARE,) + tuple(_probe_name(s, v) for s in SCENARIOS for v in VARIANTS),
+           description="one rig, 1 kHz physics, smc-flc, hover and helix, core and full fidelity; "
+                       "vs RotorPy in the same run")
 def rig_core(stats: dict[str, ProbeStats]) -> list[Metric]:
     ref = stats[ROTORPY_BARE]
     out = [ref.metric("rtf", "RotorPy bare loop (reference)", "x real time")]
     for sc in SCENARIOS:
-        s = stats[_probe_name(sc)]
-        out.append(s.metric("rtf", f"{sc}: real-time factor", "x real time", targets=RTF_TARGETS,
-                            note="sim_time_s / wall_time_s of the compiled loop, steady state"))
-        out.append(paired_ratio_metric(s, "rtf", ref, "rtf", f"{sc}: speed vs RotorPy",
+        core = stats[_probe_name(sc, "core")]
+        out.append(core.metric("rtf", f"{sc}: core real-time factor (no sensor models)", "x real time",
+                               targets=CORE_TARGETS, note="true-state feedback, issue 2's figure"))
+        out.append(paired_ratio_metric(core, "rtf", ref, "rtf", f"{sc}: core speed vs RotorPy"))
+        s = stats[_probe_name(sc, "full")]
+        out.append(s.metric("rtf", f"{sc}: full-fidelity real-time factor", "x real time", targets=FULL_TARGETS,
+                            note="5 IMU modules + magnetometers, 4 load cells, estimators; steady state"))
+        out.append(paired_ratio_metric(s, "rtf", ref, "rtf", f"{sc}: full-fidelity speed vs RotorPy",
                                        targets=VS_ROTORPY_TARGETS))
+        out.append(paired_ratio_metric(core, "rtf", s, "rtf", f"{sc}: sensing cost (core / full)",
+                                       targets=COST_TARGETS))
         out.append(s.metric("rtf_end_to_end", f"{sc}: real-time factor end to end", "x real time",
                             note="timed around the whole simulate() call (setup and result "
                                  "building included)"))

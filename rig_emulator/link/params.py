@@ -118,6 +118,7 @@ EXCLUDED: dict[str, str] = {
     "disturbance.shocks": "injected with MAV_CMD_HILMS_SHOCK",
     "disturbance.extra_masses": "injected with MAV_CMD_HILMS_EXTRA_MASS",
     "sensors.calibration_file": "text, a file path",
+    "faults.events": "a list of timed fault events; fixed at start",
     "sensor_models.mpu6050": "a datasheet table; fixed at start",
     "sensor_models.hmc5883l": "a datasheet table; fixed at start",
     "sensor_models.imu_array": "a datasheet table; fixed at start",

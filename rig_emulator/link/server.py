@@ -199,7 +199,7 @@ class RigServer:
 
     def _timesync(self, msg, channel: Channel) -> None:
         if msg.tc1 == 0:
-            now_ns = int(self.rig.time_s * 1e9)
+            now_ns = max(int(self.rig.time_s * 1e9), 1)  # tc1 = 0 would read as a request
             channel.send(M.MAVLink_timesync_message(tc1=now_ns, ts1=msg.ts1))
 
     def _ftp(self, msg, channel: Channel) -> None:

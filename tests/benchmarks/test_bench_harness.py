@@ -216,13 +216,18 @@ def test_rig_core_summary_targets():
     rig_run = {"rtf": 450.0, "rtf_end_to_end": 400.0, "us_per_step": 2.2, "physics_hz": 1000.0,
                "first_call_s": 6.0, "mean_error.position_m": 0.01}
     stats = {ROTORPY_BARE: ProbeStats(ROTORPY_BARE, [{"rtf": 0.5}, {"rtf": 0.5}])}
+    core_run = {**rig_run, "rtf": 900.0}
     for sc in SCENARIOS:
-        stats[_probe_name(sc)] = ProbeStats(_probe_name(sc), [dict(rig_run), {**rig_run, "first_call_s": 0.7}])
+        stats[_probe_name(sc, "full")] = ProbeStats(_probe_name(sc, "full"), [dict(rig_run), {**rig_run, "first_call_s": 0.7}])
+        stats[_probe_name(sc, "core")] = ProbeStats(_probe_name(sc, "core"), [dict(core_run), dict(core_run)])
     metrics = {m.name: m for m in rig_core(stats)}
-    rtf = metrics["hover: real-time factor"]
+    rtf = metrics["hover: full-fidelity real-time factor"]
     assert rtf.value == 450.0 and all(t.met(rtf.value) for t in rtf.targets)
-    vs = metrics["helix: speed vs RotorPy"]
+    vs = metrics["helix: full-fidelity speed vs RotorPy"]
     assert vs.value == 900.0 and vs.reference == ROTORPY_BARE and vs.targets[0].met(vs.value)
+    cost = metrics["hover: sensing cost (core / full)"]
+    assert cost.value == 2.0 and cost.targets[0].met(cost.value)
+    assert metrics["helix: core real-time factor (no sensor models)"].value == 900.0
     assert metrics["hover: first call, cold numba cache"].value == 6.0
     assert metrics["hover: first call, warm numba cache"].value == 0.7
 

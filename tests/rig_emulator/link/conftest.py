@@ -5,6 +5,10 @@ import pytest
 from rig_emulator.link.testing import RigThread, connect
 
 
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: a test that drives an external ground station (MAVProxy)")
+
+
 @pytest.fixture
 def rig():
     """A rig at 4x real time with a tcpin endpoint; ``rig.server`` exposes counters."""
