@@ -19,13 +19,13 @@ SATURATED_COLLECTIVE = 2
 SATURATED_YAW = 4
 
 
-@jit
+@jit(inline="always")
 def euler_torque_to_body(tx, ty, tz):
     """``torque_B = diag(1, -1, -1) torque_euler`` (B is FRD, the Euler frame FLU)."""
     return tx, -ty, -tz
 
 
-@jit
+@jit(inline="always")
 def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, forces):
     """Motor thrusts ``forces[0:4]`` (N) realising (u1..u4) as closely as the limits allow.
 
@@ -90,7 +90,7 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, forces):
     return flags
 
 
-@jit
+@jit(inline="always")
 def _yaw_scale(base, dy, f_max, s):
     if dy > 0.0 and base + s * dy > f_max:
         return max(0.0, (f_max - base) / dy)
@@ -99,7 +99,7 @@ def _yaw_scale(base, dy, f_max, s):
     return s
 
 
-@jit
+@jit(inline="always")
 def _clip(f, f_max):
     if f < 0.0:
         return 0.0

@@ -9,7 +9,7 @@ Integrators are clamped to +-integral_limit (anti-windup).
 from rig_emulator._jit import jit
 
 
-@jit
+@jit(inline="always")
 def pid_axis(e, de, ff, kp, ki, kd, integ, idx, dt, limit):
     """One PID axis; ``integ[idx]`` holds the integral of e. Returns ff + kp e + ki int + kd de."""
     v = integ[idx] + e * dt

@@ -11,7 +11,7 @@ import math
 from rig_emulator._jit import jit
 
 
-@jit
+@jit(inline="always")
 def wrap_angle(a):
     """Angle wrapped to (-pi, pi]."""
     two_pi = 2.0 * math.pi
@@ -21,7 +21,7 @@ def wrap_angle(a):
     return a
 
 
-@jit
+@jit(inline="always")
 def reference_step(target, state, i, omega_n, dt, wrap):
     """Advance filter ``i`` (state[2i] = value, state[2i+1] = rate) towards ``target``.
 

@@ -24,7 +24,7 @@ import math
 from rig_emulator._jit import jit
 
 
-@jit
+@jit(inline="always")
 def switch(s, boundary, phi):
     """sgn(s), or sat(s / phi) with a boundary layer."""
     if boundary:
@@ -41,7 +41,7 @@ def switch(s, boundary, phi):
     return 0.0
 
 
-@jit
+@jit(inline="always")
 def smc_attitude(e, de, acc_des, phi, theta, dphi, dtheta, wx, wy, wz, omega_r, cp, s_out, tau_out):
     """Eq. 9 for the three attitude axes.
 

@@ -18,7 +18,7 @@ from rig_emulator._jit import jit
 TILT_CLAMPED = 8
 
 
-@jit
+@jit(inline="always")
 def collective_thrust(vertical_force, phi, theta, max_tilt):
     """u1 from the third row of Eq. 33: ``u1 = vertical_force / (cos theta cos phi)``.
 
@@ -35,7 +35,7 @@ def collective_thrust(vertical_force, phi, theta, max_tilt):
     return u1
 
 
-@jit
+@jit(inline="always")
 def desired_tilt(ux, uy, psi_d, max_tilt):
     """Eq. 35 with the tilt clamp. Returns (phi_d, theta_d, flags)."""
     flags = 0
