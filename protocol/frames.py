@@ -165,3 +165,23 @@ def mavlink_body_rates_from_omega_b(omega_b) -> np.ndarray:
 def omega_b_from_mavlink_body_rates(rates) -> np.ndarray:
     """omega_B from MAVLink (rollspeed, pitchspeed, yawspeed): identical, both are FRD."""
     return _vectors(rates).copy()
+
+
+def rotation_from_quaternion(q) -> np.ndarray:
+    """Rotation matrix of a quaternion (w, x, y, z); normalised first (MAVLink sends float32)."""
+    w, x, y, z = (float(v) for v in q)
+    n = np.sqrt(w * w + x * x + y * y + z * z)
+    if not np.isfinite(n) or n == 0.0:
+        raise ValueError(f"quaternion {tuple(q)} has no direction")
+    w, x, y, z = w / n, x / n, y / n, z / n
+    return np.array([
+        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
+    ])
+
+
+def mavlink_euler_from_quaternion(q) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) of a MAVLink attitude quaternion (w, x, y, z) of R_NED_FRD
+    (ATTITUDE_QUATERNION, ATTITUDE_TARGET.q): the Z-Y-X angles ATTITUDE reports."""
+    return _zyx_angles(rotation_from_quaternion(q))

@@ -45,7 +45,13 @@ def _overrides(args) -> dict:
 
 
 def _write_series(result, path: Path) -> None:
+    """Write the run's time series as .npz, .csv or a MAVLink .tlog (the messages the live rig streams)."""
     series = result.series
+    if path.suffix == ".tlog":
+        from rig_emulator.link.tlog_export import export_tlog
+
+        export_tlog(result, path)
+        return
     if path.suffix == ".npz":
         np.savez_compressed(path, **series)
         return
@@ -62,7 +68,7 @@ def _write_series(result, path: Path) -> None:
                     names.append(f"{name}_{i}")
         np.savetxt(path, np.column_stack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.9g")
         return
-    raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz or .csv")
+    raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz, .csv or .tlog")
 
 
 def cmd_simulate(args) -> int:
@@ -168,7 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--omega", type=float, help="harmonic frequency in rad/s (Eq. 44)")
-    p.add_argument("--out", help="write the time series (.npz or .csv)")
+    p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     _add_config_args(p)
     p.set_defaults(func=cmd_simulate)

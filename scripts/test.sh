@@ -3,4 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup-venv.sh test
+# Real ground-station clients the integration tests drive. MAVProxy's declared dependencies
+# pull a GUI stack (about 1 GB) that a console session does not use, hence --no-deps.
+.venv/bin/python -m pip install -q --no-deps "MAVProxy==1.8.75"
 exec .venv/bin/python -m pytest -n 2 -q "$@"

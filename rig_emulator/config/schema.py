@@ -133,6 +133,9 @@ SCHEMA: dict[str, Spec] = {
     "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
     "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
     "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
+    # --- MAVLink missions ------------------------------------------------------------------------
+    "mission.item0_home": Spec("bool", "treat mission item 0 as home, stored but not flown (ArduPilot's "
+                               "convention, for MAVProxy's wp load); false: every item is flown (PX4's)"),
     # --- initial state -------------------------------------------------------------------------
     "initial.position": V3("initial virtual position (world ENU)", "m"),
     "initial.euler_deg": V3("initial phi, theta, psi", "deg", -180.0, 180.0),

@@ -6,6 +6,12 @@ shared switching logic in ``protocol.waypoint_switching``).
 
 Waypoint memory ``gstate`` (GS_* indices) and ``reached_t`` (time each waypoint was
 reached, NaN until then) live in arrays so a running rig can swap missions between chunks.
+
+Per waypoint ``i`` the guidance arguments carry: ``radii[i]`` (switching radius),
+``holds[i]`` (hold time once reached), ``speeds[i]`` (speed of the leg that ends at ``i``;
+0 = the rig's ``speed``) and ``free_xy[i]`` (1 = the target's X and Y are where the rig is
+when the leg starts: a take-off, or a landing "here"). The target of the current leg is
+resolved once, when the leg starts, into ``gstate[GS_TARGET:GS_TARGET + 3]``.
 """
 
 import math
@@ -39,7 +45,8 @@ GS_START = 3  # 3: where the line starts
 GS_HOLD_UNTIL = 6  # end of a hold at a reached waypoint, -1 when not holding
 GS_DONE = 7  # 1 once the last waypoint is reached
 GS_STARTED = 8  # 0 until the first leg is set up
-GS_SIZE = 9
+GS_TARGET = 9  # 9: the current leg's target (the waypoint, X/Y resolved for free_xy legs)
+GS_SIZE = 12
 
 
 @jit
@@ -50,7 +57,16 @@ def _start_leg(t, pos, gp, gstate):
     gstate[GS_START + 1] = pos[1]
     gstate[GS_START + 2] = pos[2]
     wp = gp.waypoints
-    gstate[GS_DURATION] = leg_duration(pos[0], pos[1], pos[2], wp[i, 0], wp[i, 1], wp[i, 2], gp.speed, gp.min_leg_time)
+    if gp.free_xy[i] != 0.0:
+        gstate[GS_TARGET] = pos[0]
+        gstate[GS_TARGET + 1] = pos[1]
+    else:
+        gstate[GS_TARGET] = wp[i, 0]
+        gstate[GS_TARGET + 1] = wp[i, 1]
+    gstate[GS_TARGET + 2] = wp[i, 2]
+    speed = gp.speeds[i] if gp.speeds[i] > 0.0 else gp.speed
+    gstate[GS_DURATION] = leg_duration(pos[0], pos[1], pos[2], gstate[GS_TARGET], gstate[GS_TARGET + 1],
+                                       gstate[GS_TARGET + 2], speed, gp.min_leg_time)
 
 
 @jit
@@ -76,13 +92,12 @@ def start_at(index, t, pos, gp, gstate):
 
 @jit
 def _waypoints(t, pos, gp, gstate, reached_t, ref):
-    wp = gp.waypoints
     if gstate[GS_STARTED] == 0.0:
         start_at(0, t, pos, gp, gstate)
     i = int(gstate[GS_INDEX])
-    tx = wp[i, 0]
-    ty = wp[i, 1]
-    tz = wp[i, 2]
+    tx = gstate[GS_TARGET]
+    ty = gstate[GS_TARGET + 1]
+    tz = gstate[GS_TARGET + 2]
     if gstate[GS_DONE] == 0.0:
         if gstate[GS_HOLD_UNTIL] >= 0.0:
             if t >= gstate[GS_HOLD_UNTIL]:
@@ -93,16 +108,15 @@ def _waypoints(t, pos, gp, gstate, reached_t, ref):
                 gstate[GS_HOLD_UNTIL] = t + gp.holds[i]
             else:
                 _advance(t, pos, gp, gstate)
-    i = int(gstate[GS_INDEX])
     if gstate[GS_DONE] != 0.0 or gstate[GS_HOLD_UNTIL] >= 0.0:
         for k in range(3):
-            ref[REF_POS + k] = wp[i, k]
+            ref[REF_POS + k] = gstate[GS_TARGET + k]
             ref[REF_VEL + k] = 0.0
     else:
         line_setpoint(
             t, gstate[GS_T0], gstate[GS_DURATION],
             gstate[GS_START], gstate[GS_START + 1], gstate[GS_START + 2],
-            wp[i, 0], wp[i, 1], wp[i, 2],
+            gstate[GS_TARGET], gstate[GS_TARGET + 1], gstate[GS_TARGET + 2],
             ref[REF_POS : REF_POS + 3], ref[REF_VEL : REF_VEL + 3],
         )
     for k in range(3):

@@ -7,9 +7,11 @@ A retry (``confirmation`` > 0) of the previous command of the same peer is ACKed
 previous result without acting twice. Unknown commands get MAV_RESULT_UNSUPPORTED.
 
 Supported: COMPONENT_ARM_DISARM, DO_SET_MODE, REQUEST_MESSAGE, REQUEST_AUTOPILOT_CAPABILITIES,
-SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MAV_CMD_HILMS_SHOCK and
-MAV_CMD_HILMS_EXTRA_MASS. Answered UNSUPPORTED until the sensor layer exists:
-PREFLIGHT_CALIBRATION and MAV_CMD_HILMS_SENSOR_FAULT.
+SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MISSION_START and
+DO_SET_MISSION_CURRENT (:mod:`rig_emulator.link.mission_exec`), PREFLIGHT_CALIBRATION (param1,
+gyro, or param2, magnetometer, or param5, accelerometer = 1: reruns the IMU calibration
+procedure of Sec. 4-1, disarmed only), MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
+MAV_CMD_HILMS_SENSOR_FAULT (IMU modules and load cells; motor faults are UNSUPPORTED).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import math
 from dataclasses import dataclass
 
 from protocol.dialect import mavlink as M
+from rig_emulator.link.mission_exec import MISSION_COMMANDS
 from rig_emulator.link.stream_table import ON_REQUEST, STREAMS
 
 ACCEPTED, DENIED, UNSUPPORTED, FAILED = (M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED,
@@ -69,8 +72,10 @@ def _set_mode(cmd, srv, channel):
     if base is None or not base & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED or main is None:
         return DENIED, []
     sub = cmd.int_param(3) or 0
-    if not srv.modes.enter(main, sub, srv.rig):
+    if not srv.modes.supports(main, sub):
         return UNSUPPORTED, []
+    if not srv.modes.enter(main, sub, srv.rig):
+        return DENIED, []
     srv.heartbeat_pending = True
     return ACCEPTED, []
 
@@ -130,7 +135,47 @@ def _extra_mass(cmd, srv, channel):
     return ACCEPTED, []
 
 
+def _calibration(cmd, srv, channel):
+    wants = [cmd.p(i) for i in (1, 2, 5)]
+    if not any(v == 1.0 for v in wants):
+        # other PREFLIGHT_CALIBRATION targets (baro, radio, airspeed, ...) do not exist on the rig
+        return UNSUPPORTED, []
+    try:
+        srv.rig.recalibrate()
+    except ValueError as exc:
+        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"calibration refused: {exc}")
+    return ACCEPTED, srv.statustext_messages(M.MAV_SEVERITY_INFO, "IMU calibration done (Levenberg-Marquardt)")
+
+
+_FAULT_NAMES = {M.HILMS_FAULT_NONE: "none", M.HILMS_FAULT_STUCK: "stuck", M.HILMS_FAULT_DEAD: "dead",
+                M.HILMS_FAULT_BIAS: "bias", M.HILMS_FAULT_NOISE: "noise", M.HILMS_FAULT_SPIKE: "spike"}
+
+
+def _sensor_fault(cmd, srv, channel):
+    kind, index, fault = cmd.int_param(1), cmd.int_param(2), cmd.int_param(3)
+    magnitude = cmd.p(4) or 0.0
+    if kind is None or index is None or fault is None:
+        return DENIED, []
+    if kind == M.HILMS_SENSOR_KIND_IMU_MODULE:
+        sensor, unit = "imu", index
+    elif kind == M.HILMS_SENSOR_KIND_LOAD_CELL:
+        sensor, unit = "load_cell", index - 1  # load cells are numbered 1..4 like the arms
+    else:
+        return UNSUPPORTED, []
+    mode = _FAULT_NAMES.get(fault)
+    if mode is None:
+        return UNSUPPORTED, []
+    try:
+        srv.rig.set_sensor_fault(sensor, unit, mode, magnitude)
+    except ValueError as exc:
+        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"sensor fault rejected: {exc}")
+    label = f"IMU module {index}" if sensor == "imu" else f"load cell {index}"
+    return ACCEPTED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"{label}: fault {mode} injected")
+
+
 HANDLERS = {
+    M.MAV_CMD_PREFLIGHT_CALIBRATION: _calibration,
+    M.MAV_CMD_HILMS_SENSOR_FAULT: _sensor_fault,
     M.MAV_CMD_COMPONENT_ARM_DISARM: _arm,
     M.MAV_CMD_DO_SET_MODE: _set_mode,
     M.MAV_CMD_REQUEST_MESSAGE: _request_message,
@@ -140,6 +185,7 @@ HANDLERS = {
     M.MAV_CMD_GET_MESSAGE_INTERVAL: _get_interval,
     M.MAV_CMD_HILMS_SHOCK: _shock,
     M.MAV_CMD_HILMS_EXTRA_MASS: _extra_mass,
+    **MISSION_COMMANDS,  # MISSION_START, DO_SET_MISSION_CURRENT
 }
 
 

@@ -67,7 +67,7 @@ class SensorReadings:
     accel: np.ndarray  # (n_modules, 3) m/s^2, FRD
     mag: np.ndarray  # (n_modules, 3) T, FRD
     imu_raw_counts: np.ndarray  # (n_modules, 9): gyro, accel, mag counts
-    imu_faults: tuple  # (n_modules,) HILMS_FAULT codes, 0 = healthy
+    imu_faults: tuple  # (n_modules,) injected HILMS_FAULT codes, 0 = none
     fused_gyro: np.ndarray  # (3,)
     fused_accel: np.ndarray
     fused_mag: np.ndarray
@@ -76,18 +76,25 @@ class SensorReadings:
     load_thrust_n: np.ndarray  # filtered thrust the rig uses
     load_faults: tuple  # (n_cells,) HILMS_FAULT codes, 0 = healthy
     ideal: bool  # True while these come from the true state
+    imu_rejected: tuple = ()  # (n_modules,) True where the ensemble rejects the module
+    load_rejected: tuple = ()  # (n_cells,) True where a guard rejected the last reading
 
     @property
     def imu_healthy(self) -> tuple:
-        return tuple(f == 0 for f in self.imu_faults)
+        rejected = self.imu_rejected or (False,) * len(self.imu_faults)
+        return tuple(f == 0 and not r for f, r in zip(self.imu_faults, rejected))
 
     @property
     def load_healthy(self) -> tuple:
-        return tuple(f == 0 for f in self.load_faults)
+        rejected = self.load_rejected or (False,) * len(self.load_faults)
+        return tuple(f == 0 and not r for f, r in zip(self.load_faults, rejected))
 
 
 def sensor_readings(snap, model: SensorModel, gravity: float) -> SensorReadings:
-    """The readings of :class:`SensorReadings` for ``snap`` (ideal, see the module doc)."""
+    """The readings of :class:`SensorReadings` for ``snap``: the simulated sensors' when the
+    snapshot carries them, else the ideal ones of the module doc."""
+    if snap.sensors is not None:
+        return _simulated(snap.sensors)
     r_wb = snap.rotation
     gyro1 = np.asarray(snap.body_rates, dtype=float)
     accel1 = r_wb.T @ np.array([0.0, 0.0, gravity])
@@ -106,4 +113,25 @@ def sensor_readings(snap, model: SensorModel, gravity: float) -> SensorReadings:
         fused_gyro=gyro1, fused_accel=accel1, fused_mag=mag1,
         load_raw_counts=cells, load_force_grf=grf, load_thrust_n=thrust,
         load_faults=(0,) * model.n_cells, ideal=True,
+    )
+
+
+def _fault_codes(modes) -> tuple:
+    """rig_emulator.sensors.faults codes are HILMS_FAULT codes (NONE STUCK DEAD BIAS NOISE SPIKE)."""
+    return tuple(int(m) for m in modes)
+
+
+def _simulated(sensors) -> SensorReadings:
+    """The simulated sensors' readings (raw counts, calibrated SI, the ensemble, load cells)."""
+    si = sensors.imu_si
+    imu_faults = _fault_codes(sensors.imu_fault_modes)
+    cell_faults = _fault_codes(sensors.cell_fault_modes)
+    return SensorReadings(
+        gyro=si[:, 0, :], accel=si[:, 1, :], mag=si[:, 2, :], imu_raw_counts=sensors.imu_raw,
+        imu_faults=imu_faults,
+        fused_gyro=sensors.fused[0], fused_accel=sensors.fused[1], fused_mag=sensors.fused[2],
+        load_raw_counts=sensors.cell_raw, load_force_grf=sensors.cell_grf, load_thrust_n=sensors.cell_thrust_n,
+        load_faults=cell_faults, ideal=False,
+        imu_rejected=tuple(bool(sensors.imu_rejected_mask & (1 << m)) for m in range(len(imu_faults))),
+        load_rejected=tuple(bool(sensors.cell_rejected_mask & (1 << c)) for c in range(len(cell_faults))),
     )

@@ -13,7 +13,8 @@ own handlers:
 * OFFBOARD: keep the current target; SET_POSITION_TARGET_LOCAL_NED and
   SET_ATTITUDE_TARGET then steer the rig (they also switch to OFFBOARD themselves).
 
-The mission issue adds AUTO.MISSION with ``FlightModes.register(AUTO, MISSION, enter)``.
+AUTO.MISSION is registered by the mission executor (:mod:`rig_emulator.link.mission_exec`).
+A handler that returns ``False`` refuses the mode (the mode does not change).
 """
 
 from __future__ import annotations
@@ -79,11 +80,10 @@ class FlightModes:
         return MODE_NAMES.get((self.main, self.sub), f"{self.main}.{self.sub}")
 
     def enter(self, main: int, sub: int, rig) -> bool:
-        """Switch to (main, sub); False (and no change) when the mode is not supported."""
+        """Switch to (main, sub); False (and no change) when the mode is not supported or refused."""
         enter = self._enter.get((main, sub))
-        if enter is None:
+        if enter is None or enter(rig) is False:
             return False
-        enter(rig)
         self.main, self.sub = main, sub
         return True
 

@@ -90,6 +90,7 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "guidance.speed": ("GUI_SPEED", None),
     "guidance.switching_radius": ("WP_RADIUS", None),
     "guidance.min_leg_time": ("GUI_MIN_LEG_T", None),
+    "mission.item0_home": ("MIS_ITEM0_HOME", None),
     "disturbance.wind_force": ("DIST_WIND", XYZ),
     "sensors.simulate": ("SENS_SIMULATE", None),
     "sensors.feedback": ("SENS_FEEDBACK", None),

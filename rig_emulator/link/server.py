@@ -28,6 +28,8 @@ from rig_emulator.link.counters import LinkCounters
 from rig_emulator.link.endpoints import open_endpoint
 from rig_emulator.link.ftp import nak_for
 from rig_emulator.link.ideal_sensors import load_sensor_model
+from rig_emulator.link.mission_exec import MissionExecutor
+from rig_emulator.link.mission_transfer import MissionTransfer
 from rig_emulator.link.modes import FlightModes
 from rig_emulator.link.param_service import ParamService
 from rig_emulator.link.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
@@ -57,6 +59,9 @@ class RigServer:
         self.ctx = TelemetryContext(rig=rig, home=home or Home(35.7, 51.4, 1200.0), sensors=load_sensor_model(),
                                     modes=self.modes, counters=self.counters, sysid=sysid)
         self.params = ParamService(rig, self)
+        self.mission = MissionExecutor(self)
+        self.ctx.mission = self.mission
+        self.mission_transfer = MissionTransfer(self, self.mission)
         self.endpoints = []
         try:
             for spec in endpoints:
@@ -83,6 +88,7 @@ class RigServer:
             "SET_ATTITUDE_TARGET": lambda msg, ch: self._setpoint(offboard.apply_attitude_target, msg),
             "TIMESYNC": self._timesync,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
+            **self.mission_transfer.handlers(),
         }
 
     # --- what tests and tools read ---------------------------------------------------------
@@ -213,6 +219,7 @@ class RigServer:
     def step_chunk(self) -> None:
         self.rig.step(self.chunk_steps)
         self._snap = None
+        self.mission.poll()
 
     def emit_streams(self) -> None:
         now = self.rig.time_s
@@ -252,6 +259,7 @@ class RigServer:
             t0 = time.monotonic()
             self._heartbeat_if_due(t0)
             self.service_io()
+            self.mission_transfer.tick(t0)
             if self.speedup > 0.0:
                 lag = sim0 + (t0 - wall0) * self.speedup - self.rig.time_s
                 if lag < self.chunk_s:

@@ -35,6 +35,7 @@ STREAMS: dict[int, Stream] = {s.msg_id: s for s in (
     _s(M.MAVLink_sys_status_message, 2.0, T.sys_status, M.MAV_DATA_STREAM_EXTENDED_STATUS),
     _s(M.MAVLink_extended_sys_state_message, 1.0, T.extended_sys_state, M.MAV_DATA_STREAM_EXTENDED_STATUS),
     _s(M.MAVLink_gps_raw_int_message, 2.0, P.gps_raw_int, M.MAV_DATA_STREAM_EXTENDED_STATUS),
+    _s(M.MAVLink_mission_current_message, 1.0, T.mission_current, M.MAV_DATA_STREAM_EXTENDED_STATUS),
     _s(M.MAVLink_system_time_message, 1.0, T.system_time, M.MAV_DATA_STREAM_EXTRA3),
     _s(M.MAVLink_home_position_message, 0.5, P.home_position, M.MAV_DATA_STREAM_EXTRA3),
     _s(M.MAVLink_attitude_message, 25.0, A.attitude, M.MAV_DATA_STREAM_EXTRA1),

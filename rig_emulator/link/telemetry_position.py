@@ -28,8 +28,8 @@ IGNORE_POS_VEL = (mavlink.POSITION_TARGET_TYPEMASK_X_IGNORE | mavlink.POSITION_T
                   | mavlink.POSITION_TARGET_TYPEMASK_VY_IGNORE | mavlink.POSITION_TARGET_TYPEMASK_VZ_IGNORE)
 
 
-def _global(snap, ctx):
-    lat, lon, alt = local_enu_to_global(ctx.home, snap.position)
+def _global(snap, ctx, position=None):
+    lat, lon, alt = local_enu_to_global(ctx.home, snap.position if position is None else position)
     return float(lat), float(lon), float(alt)
 
 
@@ -100,15 +100,17 @@ def vfr_hud(snap, ctx):
 
 
 def sim_state(snap, ctx):
-    """The true state (no sensor errors): attitude, specific force, body rates, position, velocity."""
-    w, x, y, z = mavlink_quaternion_from_rwb(snap.rotation)
-    roll, pitch, yaw = mavlink_euler_from_rwb(snap.rotation)
-    lat, lon, alt = _global(snap, ctx)
-    vn, ve, vd = enu_to_ned(snap.velocity)
-    acc = snap.rotation.T @ np.array([0.0, 0.0, ctx.cfg["airframe.gravity"]])  # true specific force, FRD
+    """The true state (the physics, not the rig's estimates): attitude, specific force at the
+    joint, body rates, virtual position and velocity."""
+    r_true = snap.true_rotation
+    w, x, y, z = mavlink_quaternion_from_rwb(r_true)
+    roll, pitch, yaw = mavlink_euler_from_rwb(r_true)
+    lat, lon, alt = _global(snap, ctx, snap.true_position)
+    vn, ve, vd = enu_to_ned(snap.true_velocity)
+    acc = r_true.T @ np.array([0.0, 0.0, ctx.cfg["airframe.gravity"]])  # true specific force, FRD
     return mavlink.MAVLink_sim_state_message(
         q1=float(w), q2=float(x), q3=float(y), q4=float(z), roll=roll, pitch=pitch, yaw=yaw,
         xacc=float(acc[0]), yacc=float(acc[1]), zacc=float(acc[2]),
-        xgyro=snap.body_rates[0], ygyro=snap.body_rates[1], zgyro=snap.body_rates[2],
+        xgyro=snap.true_body_rates[0], ygyro=snap.true_body_rates[1], zgyro=snap.true_body_rates[2],
         lat=lat, lon=lon, alt=alt, std_dev_horz=0.0, std_dev_vert=0.0,
         vn=float(vn), ve=float(ve), vd=float(vd), lat_int=U.deg_e7(lat), lon_int=U.deg_e7(lon))

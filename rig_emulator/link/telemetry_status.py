@@ -1,5 +1,5 @@
 """Status messages: HEARTBEAT, SYS_STATUS, EXTENDED_SYS_STATE, SYSTEM_TIME, SERVO_OUTPUT_RAW,
-and the on-request AUTOPILOT_VERSION. One builder per message, ``(snapshot, ctx) -> message``.
+MISSION_CURRENT, and the on-request AUTOPILOT_VERSION. One builder per message, ``(snapshot, ctx) -> message``.
 
 Identity: MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_GENERIC, component MAV_COMP_ID_AUTOPILOT1; the
 flight mode is reported in PX4's custom-mode layout (:mod:`rig_emulator.link.modes`).
@@ -78,6 +78,11 @@ def sys_status(snap, ctx):
 def extended_sys_state(snap, ctx):
     landed = M.MAV_LANDED_STATE_IN_AIR if snap.armed else M.MAV_LANDED_STATE_ON_GROUND
     return M.MAVLink_extended_sys_state_message(vtol_state=M.MAV_VTOL_STATE_UNDEFINED, landed_state=landed)
+
+
+def mission_current(snap, ctx):
+    """MISSION_CURRENT of the mission executor (seq, total, mission_state, mission_mode)."""
+    return ctx.mission.current_message()
 
 
 def system_time(snap, ctx):

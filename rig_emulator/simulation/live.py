@@ -14,10 +14,10 @@ import numpy as np
 
 from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.control.controller import OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S, OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL
-from rig_emulator.guidance.runner import ATTITUDE, GS_DONE, GS_INDEX, HOVER, WAYPOINTS, start_at
-from rig_emulator.physics import state as S
-from rig_emulator.physics.motors import rotor_speed, thrust_from_voltage
-from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_to_rot
+from rig_emulator.guidance.runner import ATTITUDE, GS_DONE, GS_INDEX, GS_STARTED, HOVER, WAYPOINTS, start_at
+from rig_emulator._jit import jit
+from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
+from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 from rig_emulator.simulation.run import Simulation
 
@@ -25,8 +25,56 @@ from rig_emulator.simulation.run import Simulation
 _RESTART_ONLY = ("sim.physics_rate_hz", "sim.control_rate_hz", "sim.log_rate_hz", "sim.seed")
 
 
-def _floats(values) -> tuple:
-    return tuple(float(v) for v in values)
+_GUIDANCE_NAMES = {0: "hover", 1: "attitude", 2: "helix", 3: "waypoints"}
+SNAPSHOT_SIZE = 68
+
+
+@jit
+def _fill_snapshot(x, pp, ref, cout, v_cmd, estimated, att_est, onboard, out):
+    """Every number of a RigSnapshot in one compiled call (layout: see LiveRig.snapshot)."""
+    if estimated:
+        phi = att_est[0]
+        theta = att_est[1]
+        psi = att_est[2]
+        wx = att_est[3]
+        wy = att_est[4]
+        wz = att_est[5]
+        for i in range(6):
+            out[i] = onboard[i]
+        quat_from_euler(phi, theta, psi, out[6:10])
+    else:
+        phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
+        wx = x[10]
+        wy = x[11]
+        wz = x[12]
+        for i in range(10):
+            out[i] = x[i]
+    out[10] = phi
+    out[11] = theta
+    out[12] = psi
+    dphi, dtheta, dpsi = euler_rates_from_body_rates(phi, theta, wx, wy, wz)
+    out[13] = dphi
+    out[14] = dtheta
+    out[15] = dpsi
+    out[16] = wx
+    out[17] = wy
+    out[18] = wz
+    for i in range(3):
+        out[19 + i] = ref[REF_POS + i]
+        out[22 + i] = ref[REF_VEL + i]
+        out[25 + i] = cout[OUT_ATT_DES + i]
+        out[28 + i] = cout[OUT_ATT_RATE_DES + i]
+        out[51 + i] = cout[OUT_S + i]
+    for i in range(4):
+        f = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        out[31 + i] = f
+        out[35 + i] = cout[OUT_THRUST_CMD + i]
+        out[39 + i] = v_cmd[i]
+        out[43 + i] = rotor_speed(f, pp.kf)
+        out[47 + i] = cout[OUT_U + i]
+    out[54] = cout[OUT_FLAGS]
+    for i in range(13):
+        out[55 + i] = x[i]
 
 
 @dataclass(frozen=True)
@@ -55,12 +103,50 @@ class RigSnapshot:
     guidance: str  # 'hover', 'attitude', 'helix', 'waypoints'
     waypoint_index: int
     mission_done: bool
+    true_position: tuple = (math.nan,) * 3  # the physics, for SIM_STATE and tests
+    true_velocity: tuple = (math.nan,) * 3
+    true_quaternion: tuple = (1.0, 0.0, 0.0, 0.0)
+    true_body_rates: tuple = (math.nan,) * 3
+    sensors: "SensorSnapshot | None" = None  # None when the sensor models are off
 
     @property
     def rotation(self) -> np.ndarray:
+        """R_WB of the attitude the rig reports."""
         R = np.zeros((3, 3))
         quat_to_rot(*self.quaternion, R)
         return R
+
+    @property
+    def true_rotation(self) -> np.ndarray:
+        R = np.zeros((3, 3))
+        quat_to_rot(*self.true_quaternion, R)
+        return R
+
+
+@dataclass(frozen=True)
+class SensorSnapshot:
+    """The simulated sensors' latest readings and the estimators' view of their health."""
+
+    imu_raw: np.ndarray  # (5, 9) raw counts: gyro, accel, mag per module
+    imu_si: np.ndarray  # (5, 3, 3) calibrated SI [module, sensor (gyro, accel, mag), axis], FRD
+    fused: np.ndarray  # (3, 3) ensemble of the modules [sensor, axis]
+    imu_rejected_mask: int  # modules the ensemble rejects (bit m)
+    imu_fault_modes: tuple  # injected fault per module (rig_emulator.sensors.faults codes)
+    cell_raw: np.ndarray  # (4,) load-cell counts
+    cell_grf: np.ndarray  # (4,) calibrated gram-force C (S - b)
+    cell_thrust_n: np.ndarray  # (4,) guarded, filtered thrust the rig uses (N)
+    cell_rejected_mask: int  # cells whose last reading a guard rejected
+    cell_fault_modes: tuple
+
+
+@dataclass(frozen=True)
+class MissionStatus:
+    """The mission guidance at one instant (:meth:`LiveRig.mission_status`)."""
+
+    flying: bool  # the guidance follows the mission (not paused, not another target)
+    index: int  # waypoint being flown to (the last one once done)
+    done: bool  # the last waypoint was reached
+    reached_t: np.ndarray  # time each waypoint was reached, NaN until then
 
 
 class LiveRig:
@@ -75,7 +161,10 @@ class LiveRig:
         self.sim = Simulation(cfg, log_capacity=chunk_steps_max + 1)
         self.chunk_steps_max = chunk_steps_max
         self.sim.armed = False
-        self._mission = None  # (waypoints, radii, holds)
+        self._snap_values = np.zeros(SNAPSHOT_SIZE)
+        self._calibrations = 0
+        self._mission = None  # (waypoints, radii, holds, speeds, free_xy) stored
+        self._flying = None  # the same for the mission the guidance was last started on
 
     # --- stepping ----------------------------------------------------------------------
     @property
@@ -103,42 +192,69 @@ class LiveRig:
 
     # --- observing -----------------------------------------------------------------------
     def snapshot(self) -> RigSnapshot:
+        """What the rig reports (its own estimates when it flies on its sensors) and the truth."""
         sim = self.sim
-        x = sim.x
-        phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
-        rates = euler_rates_from_body_rates(phi, theta, x[10], x[11], x[12])
-        pp = sim.pp
-        thrusts = tuple(thrust_from_voltage(v, pp.k_v, pp.f_ceiling) for v in x[S.MOTOR_V : S.MOTOR_V + 4])
-        gname = {0: "hover", 1: "attitude", 2: "helix", 3: "waypoints"}[sim.gp.gtype]
+        v = self._snap_values
+        sp, ss = sim.sensing.params, sim.sensing.state
+        _fill_snapshot(sim.x, sim.pp, sim.ref, sim.cout, sim.v_cmd, sp.estimated, ss.att_est, ss.onboard, v)
         attitude_mode = sim.ref[REF_MODE] == 1.0
+        t = v.tolist()
+        sensors = None
+        if sp.simulate:
+            st = ss.sstate
+            lcp = sp.lcp
+            sensors = SensorSnapshot(
+                imu_raw=ss.imu_raw.copy(),
+                imu_si=ss.awork.si.copy(),
+                fused=ss.awork.combined.copy(),
+                imu_rejected_mask=int(ss.health[0]),
+                imu_fault_modes=tuple(int(m) for m in st.imu_fault_mode),
+                cell_raw=ss.cell_raw.copy(),
+                cell_grf=(lcp.newton_per_count * (ss.cell_raw - lcp.zero_counts)) / GRAM_FORCE_N,
+                cell_thrust_n=ss.thrust_est.copy(),
+                cell_rejected_mask=int(ss.health[1]),
+                cell_fault_modes=tuple(int(m) for m in st.cell_fault_mode),
+            )
+        nan3 = (math.nan,) * 3
         return RigSnapshot(
             time_s=float(sim.time),
             armed=sim.armed,
-            position=_floats(x[0:3]),
-            velocity=_floats(x[3:6]),
-            quaternion=_floats(x[6:10]),
-            euler=(float(phi), float(theta), float(psi)),
-            euler_rates=_floats(rates),
-            body_rates=_floats(x[10:13]),
-            position_target=(math.nan,) * 3 if attitude_mode else _floats(sim.ref[REF_POS : REF_POS + 3]),
-            velocity_target=(math.nan,) * 3 if attitude_mode else _floats(sim.ref[REF_VEL : REF_VEL + 3]),
-            euler_target=_floats(sim.cout[OUT_ATT_DES : OUT_ATT_DES + 3]),
-            euler_rate_target=_floats(sim.cout[OUT_ATT_RATE_DES : OUT_ATT_RATE_DES + 3]),
-            thrusts=_floats(thrusts),
-            thrust_commands=_floats(sim.cout[OUT_THRUST_CMD : OUT_THRUST_CMD + 4]),
-            voltage_commands=_floats(sim.v_cmd),
-            rotor_speeds=_floats(rotor_speed(f, pp.kf) for f in thrusts),
-            u=_floats(sim.cout[OUT_U : OUT_U + 4]),
-            sliding_surfaces=_floats(sim.cout[OUT_S : OUT_S + 3]),
-            flags=int(sim.cout[OUT_FLAGS]),
-            guidance=gname,
+            position=tuple(t[0:3]),
+            velocity=tuple(t[3:6]),
+            quaternion=tuple(t[6:10]),
+            euler=tuple(t[10:13]),
+            euler_rates=tuple(t[13:16]),
+            body_rates=tuple(t[16:19]),
+            position_target=nan3 if attitude_mode else tuple(t[19:22]),
+            velocity_target=nan3 if attitude_mode else tuple(t[22:25]),
+            euler_target=tuple(t[25:28]),
+            euler_rate_target=tuple(t[28:31]),
+            thrusts=tuple(t[31:35]),
+            thrust_commands=tuple(t[35:39]),
+            voltage_commands=tuple(t[39:43]),
+            rotor_speeds=tuple(t[43:47]),
+            u=tuple(t[47:51]),
+            sliding_surfaces=tuple(t[51:54]),
+            flags=int(t[54]),
+            guidance=_GUIDANCE_NAMES[sim.gp.gtype],
             waypoint_index=int(sim.gstate[GS_INDEX]),
             mission_done=bool(sim.gstate[GS_DONE]),
+            true_position=tuple(t[55:58]),
+            true_velocity=tuple(t[58:61]),
+            true_quaternion=tuple(t[61:65]),
+            true_body_rates=tuple(t[65:68]),
+            sensors=sensors,
         )
 
     def reached_times(self) -> np.ndarray:
         """Time each mission waypoint was reached (NaN until then)."""
         return self.sim.reached_t.copy()
+
+    def mission_status(self) -> MissionStatus:
+        """Where the mission guidance is (cheap: no snapshot)."""
+        gs = self.sim.gstate
+        return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0,
+                             index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
 
     # --- commanding ------------------------------------------------------------------------
     def arm(self, armed: bool = True) -> None:
@@ -162,9 +278,9 @@ class LiveRig:
         return new_cfg
 
     def _guidance_from(self, cfg: RigConfig, current):
-        if self._mission is not None:
-            wp, radii, holds = self._mission
-            gp = guidance_params(cfg, wp, radii, holds)
+        mission = self._flying if self._flying is not None else self._mission
+        if mission is not None:
+            gp = guidance_params(cfg, *mission)
         else:
             gp = guidance_params(cfg)
         # keep the live guidance choice (guided target, attitude target, mission) over the config's
@@ -187,23 +303,35 @@ class LiveRig:
             gtype=ATTITUDE, att_offset=np.array([phi, theta, 0.0]), amplitude=np.zeros(3), yaw=float(psi)
         )
 
-    def set_mission(self, waypoints, radii=None, holds=None) -> None:
-        """Store a waypoint mission (world ENU, m); :meth:`start_mission` flies it."""
+    def set_mission(self, waypoints, radii=None, holds=None, speeds=None, free_xy=None) -> None:
+        """Store a waypoint mission (world ENU, m); :meth:`start_mission` flies it.
+
+        Per waypoint (:func:`~rig_emulator.simulation.params.guidance_params`): switching
+        radius (0 = ``guidance.switching_radius``), hold time (s), speed of the leg ending
+        there (0 = ``guidance.speed``), ``free_xy`` (1 = X/Y where the rig is when the leg
+        starts). A mission being flown keeps flying until :meth:`start_mission` replaces it.
+        """
         wp = np.ascontiguousarray(waypoints, dtype=np.float64).reshape(-1, 3)
         if wp.shape[0] == 0:
             raise ValueError("a mission needs at least one waypoint")
-        self._mission = (wp, radii, holds)
+        mission = (wp, radii, holds, speeds, free_xy)
+        guidance_params(self.cfg, *mission)  # raises on inconsistent sizes, before anything changes
+        self._mission = mission
 
-    def start_mission(self, index: int = 0) -> None:
-        """Fly the stored mission from waypoint ``index`` (Sec. 4-4 switching)."""
+    def start_mission(self, index: int = 0, keep_reached: bool = False) -> None:
+        """Fly the stored mission from waypoint ``index`` (Sec. 4-4 switching), on a virtual
+        line from where the rig is now. ``keep_reached`` keeps the reached times of a
+        mission resumed after a pause (else they restart as NaN)."""
         if self._mission is None:
             raise ValueError("no mission stored")
-        wp, radii, holds = self._mission
+        wp = self._mission[0]
         if not 0 <= index < wp.shape[0]:
             raise ValueError(f"mission index {index} out of range 0..{wp.shape[0] - 1}")
-        gp = guidance_params(self.cfg, wp, radii, holds)
+        gp = guidance_params(self.cfg, *self._mission)
         self.sim.gp = gp._replace(gtype=WAYPOINTS, yaw=self.sim.gp.yaw)
-        self.sim.reached_t = np.full(wp.shape[0], np.nan)
+        self._flying = self._mission
+        if not (keep_reached and self.sim.reached_t.shape[0] == wp.shape[0]):
+            self.sim.reached_t = np.full(wp.shape[0], np.nan)
         start_at(index, self.sim.time, self.sim.x[0:3].copy(), self.sim.gp, self.sim.gstate)
 
     def hold_position(self) -> None:
@@ -221,6 +349,28 @@ class LiveRig:
         keep = d.shocks[d.shocks[:, 0] + d.shocks[:, 3] > now] if d.shocks.size else d.shocks
         shocks = np.vstack([keep.reshape(-1, 4), [[now, float(arm), float(torque), float(duration)]]])
         self.sim.dist = d._replace(shocks=np.ascontiguousarray(shocks))
+
+    def set_sensor_fault(self, sensor: str, index: int, mode: str, magnitude: float = 0.0) -> None:
+        """Inject (or with mode 'none' clear) a fault on IMU module ``index`` or load cell ``index``."""
+        if not self.sim.sensing.params.simulate:
+            raise ValueError("the sensor models are off (sensors.simulate = false)")
+        self.sim.set_sensor_fault(sensor, index, mode, magnitude)
+
+    def recalibrate(self) -> None:
+        """Rerun the IMU calibration procedure (Sec. 4-1) and apply the new result.
+
+        Reading: like the hardware's procedure it needs the rig still on the bench, so it is
+        refused while armed; it uses a fresh random stream, so repeated calibrations differ
+        as repeated procedures on the real rig would.
+        """
+        if self.sim.armed:
+            raise ValueError("calibration needs the rig disarmed and still")
+        sensing = self.sim.sensing
+        if not sensing.params.simulate:
+            raise ValueError("the sensor models are off (sensors.simulate = false)")
+        self._calibrations += 1
+        rng = np.random.default_rng(np.random.SeedSequence([self.cfg["sim.seed"], 0xCA1, self._calibrations]))
+        sensing.recalibrate_imu(self.cfg, rng)
 
     def set_extra_mass(self, arm: int, mass: float, distance: float) -> None:
         """Fig. 15: put (or with mass 0 remove) a point mass on arm 1..4 at ``distance`` from the joint."""

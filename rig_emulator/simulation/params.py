@@ -33,7 +33,7 @@ ControlParams = namedtuple(
 
 GuidanceParams = namedtuple(
     "GuidanceParams",
-    "gtype hover_position yaw amplitude omega att_offset waypoints radii holds speed min_leg_time",
+    "gtype hover_position yaw amplitude omega att_offset waypoints radii holds speeds free_xy speed min_leg_time",
 )
 
 Disturbances = namedtuple("Disturbances", "wind gusts shocks extra")
@@ -120,8 +120,11 @@ def control_params(cfg: RigConfig) -> ControlParams:
     )
 
 
-def guidance_params(cfg: RigConfig, waypoints=None, radii=None, holds=None) -> GuidanceParams:
-    """Guidance arguments; ``waypoints``/``radii``/``holds`` override the config's (missions)."""
+def guidance_params(cfg: RigConfig, waypoints=None, radii=None, holds=None, speeds=None, free_xy=None) -> GuidanceParams:
+    """Guidance arguments; ``waypoints``/``radii``/``holds``/``speeds``/``free_xy`` override the
+    config's (missions). Per waypoint: a radius or speed of 0 means the configured
+    ``guidance.switching_radius`` / ``guidance.speed``; ``free_xy`` 1 takes the target's X and Y
+    from where the rig is when the leg starts (take-off, landing in place)."""
     wp = _arr(cfg["guidance.waypoints"] if waypoints is None else waypoints).reshape(-1, 3)
     if wp.shape[0] == 0:
         wp = np.zeros((1, 3))
@@ -130,6 +133,11 @@ def guidance_params(cfg: RigConfig, waypoints=None, radii=None, holds=None) -> G
     r = np.full(n, default_r) if radii is None else _arr(radii)
     r = np.where(r > 0.0, r, default_r)
     h = np.zeros(n) if holds is None else _arr(holds)
+    v = np.zeros(n) if speeds is None else _arr(speeds)
+    f = np.zeros(n) if free_xy is None else _arr(free_xy)
+    for name, a in (("radii", r), ("holds", h), ("speeds", v), ("free_xy", f)):
+        if a.shape != (n,):
+            raise ValueError(f"{name}: expected {n} values (one per waypoint), got shape {a.shape}")
     return GuidanceParams(
         gtype=GUIDANCE_CODES[cfg["guidance.type"]],
         hover_position=_arr(cfg["guidance.hover_position"]),
@@ -140,6 +148,8 @@ def guidance_params(cfg: RigConfig, waypoints=None, radii=None, holds=None) -> G
         waypoints=wp,
         radii=r,
         holds=h,
+        speeds=v,
+        free_xy=f,
         speed=cfg["guidance.speed"],
         min_leg_time=cfg["guidance.min_leg_time"],
     )

@@ -87,6 +87,15 @@ class Sensing:
             rotor_speed=np.zeros(4),
         )
 
+    def recalibrate_imu(self, cfg: RigConfig, rng) -> None:
+        """Run the IMU calibration procedure again and apply the result in place."""
+        cal = calibrate_imu_modules(self.est_cfg, self.imu_truth, rng)
+        cal.procedure["seed"] = cfg["sim.seed"]
+        arrays = cal.arrays()
+        self.params.chain.cal.gain[...] = arrays.gain
+        self.params.chain.cal.offset_counts[...] = arrays.offset_counts
+        self.imu_calibration = cal
+
     def _imu_calibration(self, cfg: RigConfig, rng) -> ImuCalibration:
         if cfg["sensors.calibration"] == "none":
             return nominal_calibration(self.imu_truth)

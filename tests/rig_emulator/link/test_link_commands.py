@@ -11,11 +11,36 @@ from rig_emulator.link.testing import NAN, command, recv
 ACCEPTED, DENIED, UNSUPPORTED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED
 
 
-def test_unknown_and_not_yet_available_commands_are_unsupported(client):
+def test_unknown_commands_are_unsupported(client):
     assert command(client, 31999).result == UNSUPPORTED
     assert command(client, M.MAV_CMD_NAV_TAKEOFF).result == UNSUPPORTED
-    assert command(client, M.MAV_CMD_HILMS_SENSOR_FAULT, 0, 1, 3, 0.1).result == UNSUPPORTED
-    assert command(client, M.MAV_CMD_PREFLIGHT_CALIBRATION, 1, 0, 0, 0, 0, 0, 0).result == UNSUPPORTED
+    # motor faults are not modelled; a barometer calibration has no barometer to calibrate
+    assert command(client, M.MAV_CMD_HILMS_SENSOR_FAULT, M.HILMS_SENSOR_KIND_MOTOR, 1, M.HILMS_FAULT_THRUST_LOSS, 0.5).result == UNSUPPORTED
+    assert command(client, M.MAV_CMD_PREFLIGHT_CALIBRATION, 0, 0, 1, 0, 0, 0, 0).result == UNSUPPORTED
+
+
+def test_sensor_fault_reaches_the_module_and_its_telemetry(rig, client):
+    result = command(client, M.MAV_CMD_HILMS_SENSOR_FAULT, M.HILMS_SENSOR_KIND_IMU_MODULE, 1, M.HILMS_FAULT_DEAD, 0)
+    assert result.result == ACCEPTED
+    msg = recv(client, "HILMS_IMU_MODULE", condition=lambda m: m.module_index == 1 and m.fault == M.HILMS_FAULT_DEAD)
+    assert list(msg.gyro_raw) == [0, 0, 0] and list(msg.accel_raw) == [0, 0, 0]
+    assert rig.server.rig.snapshot().sensors.imu_fault_modes[1] == 2
+    assert command(client, M.MAV_CMD_HILMS_SENSOR_FAULT, M.HILMS_SENSOR_KIND_LOAD_CELL, 2, M.HILMS_FAULT_SPIKE, 40).result == ACCEPTED
+    assert rig.server.rig.snapshot().sensors.cell_fault_modes[1] == 5
+    assert command(client, M.MAV_CMD_HILMS_SENSOR_FAULT, M.HILMS_SENSOR_KIND_IMU_MODULE, 9, M.HILMS_FAULT_DEAD, 0).result == DENIED
+    assert command(client, M.MAV_CMD_HILMS_SENSOR_FAULT, M.HILMS_SENSOR_KIND_IMU_MODULE, 1, M.HILMS_FAULT_NONE, 0).result == ACCEPTED
+    assert rig.server.rig.snapshot().sensors.imu_fault_modes[1] == 0
+
+
+def test_preflight_calibration_reruns_the_procedure_when_disarmed(rig, client):
+    before = rig.server.rig.sim.sensing.params.chain.cal.gain.copy()
+    assert command(client, M.MAV_CMD_PREFLIGHT_CALIBRATION, 1, 0, 0, 0, 0, 0, 0).result == ACCEPTED
+    assert recv(client, "STATUSTEXT", condition=lambda m: "calibration done" in m.text) is not None
+    after = rig.server.rig.sim.sensing.params.chain.cal.gain
+    assert not (before == after).all()  # a new procedure, new noise: a new (close) result
+    assert abs(after - before).max() < 0.01 * abs(before).max()
+    assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED
+    assert command(client, M.MAV_CMD_PREFLIGHT_CALIBRATION, 0, 0, 0, 0, 1, 0, 0).result == DENIED
 
 
 def test_duplicates_each_get_an_ack(rig, client):

@@ -1,7 +1,8 @@
 """MAVProxy (PyPI) against the running rig: connects, fetches every parameter, shows attitude.
 
 MAVProxy is driven through its stdin; its exit status is not meaningful, its output is.
-Skipped when MAVProxy is not installed (``pip install --no-deps MAVProxy pyserial``).
+``scripts/test.sh`` installs it (``pip install --no-deps MAVProxy`` plus pyserial); the test fails
+without it rather than passing silently.
 """
 
 import queue
@@ -17,10 +18,11 @@ from rig_emulator.link.params import ParamTable
 from rig_emulator.link.testing import RigProcess
 
 MAVPROXY = Path(sys.executable).parent / "mavproxy.py"
-pytestmark = [
-    pytest.mark.skipif(not MAVPROXY.exists(), reason="MAVProxy is not installed"),
-    pytest.mark.slow,
-]
+pytestmark = [pytest.mark.slow]
+
+
+def test_mavproxy_is_installed():
+    assert MAVPROXY.exists(), "MAVProxy is a test requirement: run scripts/test.sh or pip install --no-deps MAVProxy"
 
 
 class _Lines:

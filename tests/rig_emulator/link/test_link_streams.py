@@ -70,11 +70,17 @@ def test_legacy_request_data_stream(client):
 
 
 def test_telemetry_values_are_consistent(client):
-    """Level and at rest on the virtual ground: accel ~ -1 g on z (FRD), position at the origin."""
-    imu = recv(client, "SCALED_IMU")
-    assert abs(imu.zacc + 1000) < 5 and abs(imu.xacc) < 5
-    hi = recv(client, "HIGHRES_IMU")
-    assert abs(hi.zacc + 9.81) < 0.05
+    """Level and at rest on the virtual ground: accel ~ -1 g on z (FRD), position at the origin.
+
+    The readings are the simulated sensors' (calibrated): one accelerometer sample carries
+    about 9 mg of white noise (400 ug/sqrt(Hz) at 500 Hz bandwidth), so samples are averaged.
+    """
+    imus = [recv(client, "SCALED_IMU") for _ in range(20)]
+    zacc = sum(m.zacc for m in imus) / len(imus)
+    xacc = sum(m.xacc for m in imus) / len(imus)
+    assert abs(zacc + 1000) < 10 and abs(xacc) < 10
+    his = [recv(client, "HIGHRES_IMU") for _ in range(10)]
+    assert abs(sum(h.zacc for h in his) / len(his) + 9.81) < 0.05
     gpi = recv(client, "GLOBAL_POSITION_INT")
     home = recv(client, "HOME_POSITION")
     assert abs(gpi.lat - home.latitude) < 10 and abs(gpi.lon - home.longitude) < 10

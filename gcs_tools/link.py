@@ -1,0 +1,148 @@
+"""A pymavlink link to a vehicle: connect, find the vehicle, command it, request streams.
+
+Connections are mavutil connection strings (``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``,
+``udpout:host:port``, ``/dev/ttyUSB0``, ...), opened in the hilms dialect over MAVLink 2 as
+ground station (system 255, component MAV_COMP_ID_MISSIONPLANNER by default).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+from gcs_tools.errors import OperationError, UsageError
+from protocol.dialect import mavlink as M
+from protocol.dialect import use_hilms_dialect
+
+GCS_SYSID = 255
+GCS_COMPID = M.MAV_COMP_ID_MISSIONPLANNER
+HEARTBEAT_TIMEOUT_S = 10.0
+COMMAND_TIMEOUT_S = 1.5
+COMMAND_RETRIES = 3
+NAN = math.nan
+
+
+class Link:
+    """A connection to one vehicle (the first that sends a HEARTBEAT, or ``target_system``)."""
+
+    def __init__(self, url: str, target_system: int | None = None, source_system: int = GCS_SYSID,
+                 source_component: int = GCS_COMPID):
+        use_hilms_dialect()
+        from pymavlink import mavutil
+
+        try:
+            self.conn = mavutil.mavlink_connection(url, source_system=source_system,
+                                                   source_component=source_component, autoreconnect=False)
+        except (OSError, ValueError) as exc:
+            raise OperationError(f"cannot open {url}: {exc}") from None
+        except Exception as exc:  # noqa: BLE001 - pymavlink raises bare Exceptions for bad device strings
+            raise UsageError(f"cannot open {url}: {exc}") from None
+        self.url = url
+        self.target_system = target_system
+        self.target_component = M.MAV_COMP_ID_AUTOPILOT1
+        self.last_heartbeat = None
+
+    @property
+    def mav(self):
+        return self.conn.mav
+
+    def close(self) -> None:
+        self.conn.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def recv(self, types=None, timeout: float = 1.0, condition=None):
+        """The next message of ``types`` from the vehicle satisfying ``condition`` (None on timeout)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            try:
+                msg = self.conn.recv_match(type=types, blocking=True, timeout=min(left, 0.25))
+            except OSError as exc:
+                raise OperationError(f"link {self.url} lost: {exc}") from None
+            if msg is None:
+                continue
+            if msg.get_type() == "HEARTBEAT" and msg.get_srcSystem() == self.target_system:
+                self.last_heartbeat = msg
+            if self.target_system is not None and msg.get_srcSystem() != self.target_system:
+                continue
+            if condition is None or condition(msg):
+                return msg
+
+    def wait_vehicle(self, timeout: float = HEARTBEAT_TIMEOUT_S):
+        """Wait for the vehicle's HEARTBEAT; sets ``target_system``/``target_component``."""
+
+        def is_vehicle(m):
+            return m.type != M.MAV_TYPE_GCS and m.autopilot != M.MAV_AUTOPILOT_INVALID
+
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            msg = self.recv("HEARTBEAT", deadline - time.monotonic())
+            if msg is not None and is_vehicle(msg):
+                self.target_system = msg.get_srcSystem()
+                self.target_component = msg.get_srcComponent()
+                self.last_heartbeat = msg
+                return msg
+        raise OperationError(f"no vehicle HEARTBEAT on {self.url} within {timeout:g} s")
+
+    def command(self, cmd: int, *params, timeout: float = COMMAND_TIMEOUT_S, retries: int = COMMAND_RETRIES):
+        """COMMAND_LONG with the command protocol's retries; returns the COMMAND_ACK result."""
+        p = list(params) + [NAN] * (7 - len(params))
+        for attempt in range(retries + 1):
+            self.mav.command_long_send(self.target_system, self.target_component, cmd, attempt, *p)
+            ack = self.recv("COMMAND_ACK", timeout, lambda m: m.command == cmd)
+            if ack is not None:
+                if ack.result == M.MAV_RESULT_IN_PROGRESS:
+                    ack = self.recv("COMMAND_ACK", 10 * timeout,
+                                    lambda m: m.command == cmd and m.result != M.MAV_RESULT_IN_PROGRESS)
+                    if ack is None:
+                        break
+                return ack.result
+        name = M.enums["MAV_CMD"][cmd].name if cmd in M.enums["MAV_CMD"] else str(cmd)
+        raise OperationError(f"{name}: no COMMAND_ACK after {retries + 1} attempts")
+
+    def command_ok(self, cmd: int, *params, what: str = "") -> None:
+        result = self.command(cmd, *params)
+        if result != M.MAV_RESULT_ACCEPTED:
+            name = M.enums["MAV_RESULT"][result].name if result in M.enums["MAV_RESULT"] else str(result)
+            raise OperationError(f"{what or M.enums['MAV_CMD'][cmd].name} rejected: {name}")
+
+    def is_armed(self) -> bool:
+        hb = self.last_heartbeat
+        return hb is not None and bool(hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
+
+    def arm(self) -> None:
+        self.command_ok(M.MAV_CMD_COMPONENT_ARM_DISARM, 1.0, what="arming")
+
+    def set_message_rate(self, msg_id: int, hz: float) -> None:
+        """MAV_CMD_SET_MESSAGE_INTERVAL (hz <= 0 stops the message)."""
+        interval = -1.0 if hz <= 0 else 1e6 / hz
+        self.command_ok(M.MAV_CMD_SET_MESSAGE_INTERVAL, float(msg_id), interval,
+                        what=f"SET_MESSAGE_INTERVAL {msg_id} at {hz:g} Hz")
+
+    def request_data_streams(self, hz: float) -> None:
+        """The legacy REQUEST_DATA_STREAM for every stream group (no ACK in the protocol)."""
+        self.mav.request_data_stream_send(self.target_system, self.target_component, M.MAV_DATA_STREAM_ALL,
+                                          int(round(hz)), 1 if hz > 0 else 0)
+
+    def home_position(self, timeout: float = 3.0):
+        """The vehicle's HOME_POSITION (MAV_CMD_GET_HOME_POSITION), or None when it does not send one."""
+        try:
+            self.command(M.MAV_CMD_GET_HOME_POSITION, timeout=timeout / 2, retries=1)
+        except OperationError:
+            pass
+        return self.recv("HOME_POSITION", timeout)
+
+
+def message_id(name: str) -> int:
+    """MAVLink message id of a message name (UsageError when unknown)."""
+    cls = M.mavlink_map.get(getattr(M, f"MAVLINK_MSG_ID_{name.upper()}", -1))
+    if cls is None:
+        raise UsageError(f"unknown MAVLink message {name!r}")
+    return cls.id
