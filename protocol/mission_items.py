@@ -291,12 +291,19 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
 
 
 # --- the rig's mission -> items (ground tools, tests) ----------------------------------------------
+def _f32(value) -> float:
+    """The value a float32 field carries."""
+    return float(np.float32(value))
+
+
 def waypoint_items(waypoints_enu, home: Home, frame: int = M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
                    hold_s: float = 0.0, radius_m: float = 0.0, speed_m_s: float | None = None,
                    first_seq: int = 0) -> list[MissionItem]:
     """NAV_WAYPOINT items for world-ENU waypoints (m) about ``home`` in ``frame``; with
-    ``speed_m_s`` a DO_CHANGE_SPEED item comes first. Global coordinates are rounded to
-    what MISSION_ITEM_INT carries (1e-7 deg), local ones to 1e-4 m."""
+    ``speed_m_s`` a DO_CHANGE_SPEED item comes first. The first item has ``current = 1``
+    (MAVSDK insists on exactly one). Every number is rounded to what
+    MISSION_ITEM_INT carries (1e-7 deg global, 1e-4 m local, float32 params and z), so a
+    downloaded copy compares equal."""
     if frame not in POSITION_FRAMES:
         raise ValueError(f"frame {frame}: use one of {sorted(POSITION_FRAMES)}")
     wp = np.asarray(waypoints_enu, dtype=float).reshape(-1, 3)
@@ -304,7 +311,7 @@ def waypoint_items(waypoints_enu, home: Home, frame: int = M.MAV_FRAME_GLOBAL_RE
     seq = first_seq
     if speed_m_s is not None:
         items.append(MissionItem(seq=seq, frame=M.MAV_FRAME_MISSION, command=M.MAV_CMD_DO_CHANGE_SPEED,
-                                 param1=1.0, param2=float(speed_m_s), param3=-1.0))
+                                 param1=1.0, param2=_f32(speed_m_s), param3=-1.0))
         seq += 1
     for p in wp:
         if frame in LOCAL_FRAMES:
@@ -314,7 +321,9 @@ def waypoint_items(waypoints_enu, home: Home, frame: int = M.MAV_FRAME_GLOBAL_RE
             lat, lon, alt = local_enu_to_global(home, p)
             x, y = round(lat * GLOBAL_SCALE) / GLOBAL_SCALE, round(lon * GLOBAL_SCALE) / GLOBAL_SCALE
             z = alt - home.alt_m if frame in RELATIVE_FRAMES else alt
-        items.append(MissionItem(seq=seq, frame=frame, command=M.MAV_CMD_NAV_WAYPOINT, param1=float(hold_s),
-                                 param2=float(radius_m), x=float(x), y=float(y), z=float(z)))
+        items.append(MissionItem(seq=seq, frame=frame, command=M.MAV_CMD_NAV_WAYPOINT, param1=_f32(hold_s),
+                                 param2=_f32(radius_m), x=float(x), y=float(y), z=_f32(z)))
         seq += 1
+    if items:
+        items[0] = replace(items[0], current=1)
     return items

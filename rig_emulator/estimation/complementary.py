@@ -66,13 +66,13 @@ def wrap_pi(a):
     return a - 2.0 * math.pi * math.floor((a + math.pi) / (2.0 * math.pi))
 
 
-@jit
+@jit(inline="always")
 def tilt_from_specific_force(fx, fy, fz):
     """(phi, theta) of a quasi-static specific force ``f_B`` (B = FRD)."""
     return math.atan2(-fy, -fz), math.atan2(-fx, math.sqrt(fy * fy + fz * fz))
 
 
-@jit
+@jit(inline="always")
 def heading_from_mag(mx, my, mz, phi, theta, heading_ref):
     """Tilt-compensated heading ``psi`` of a body-frame (FRD) field for given roll and pitch."""
     ux = mx
@@ -86,7 +86,7 @@ def heading_from_mag(mx, my, mz, phi, theta, heading_ref):
     return wrap_pi(heading_ref - math.atan2(v1, hx))
 
 
-@jit
+@jit(inline="always")
 def complementary_step(gyro, accel, mag, mag_fresh, p, state, out):
     """One IMU sample of the filter; writes ``out = [phi, theta, psi, wx, wy, wz]``."""
     if state[6] == 0.0:

@@ -44,8 +44,31 @@ def ensemble_state(n_modules: int) -> EnsembleState:
 
 
 @jit(inline="always")
+def _median5(p0, p1, p2, p3, p4):
+    """Median of five numbers by the seven compare-exchanges of Devillard's opt_med5 (no scratch)."""
+    if p0 > p1:
+        p0, p1 = p1, p0
+    if p3 > p4:
+        p3, p4 = p4, p3
+    if p0 > p3:
+        p0, p3 = p3, p0
+    if p1 > p4:
+        p1, p4 = p4, p1
+    if p1 > p2:
+        p1, p2 = p2, p1
+    if p2 > p3:
+        p2, p3 = p3, p2
+    if p1 > p2:
+        p1, p2 = p2, p1
+    return p2
+
+
+@jit(inline="always")
 def _median_axis(values, s, axis, scratch):
     n = values.shape[0]
+    if n == 5:
+        return _median5(values[0, s, axis], values[1, s, axis], values[2, s, axis],
+                        values[3, s, axis], values[4, s, axis])
     for m in range(n):  # insertion sort into scratch
         v = values[m, s, axis]
         j = m
@@ -59,7 +82,7 @@ def _median_axis(values, s, axis, scratch):
     return 0.5 * (scratch[h - 1] + scratch[h])
 
 
-@jit
+@jit(inline="always")
 def ensemble_vectors(values, s, mode, threshold, scratch, out):
     """Combine sensor ``s`` of every module ``values[m, s, :]`` into ``out`` (3,).
 
@@ -109,7 +132,7 @@ def ensemble_vectors(values, s, mode, threshold, scratch, out):
     return rejected
 
 
-@jit
+@jit(inline="always")
 def ensemble_step(values, sampled_mask, p, state, out):
     """Ensemble of gyro and accel (if ``SAMPLED_INERTIAL``) and mag (if ``SAMPLED_MAG``).
 

@@ -69,7 +69,7 @@ def nominal_calibration(truth: ImuModulesTruth) -> ImuCalibration:
                           {"kind": "nominal datasheet scaling"})
 
 
-@jit
+@jit(inline="always")
 def apply_imu_calibration(raw, cal, out_si):
     """Raw counts (n, 9) -> calibrated SI (n, 3, 3) ``[module, sensor, axis]`` (Sec. 4-1)."""
     G = cal.gain

@@ -225,3 +225,103 @@ class RigThread(_RigBase):
         self.server.close()
         if self.error is not None:
             raise self.error
+
+
+class MissionClient:
+    """A ground-station side of the mission protocol over a pymavlink connection, following
+    the spec's retry rules (for tests and the transfer benchmark; the ground tools have
+    their own in ``gcs_tools``).
+
+    Upload: MISSION_COUNT, then each requested item as MISSION_ITEM_INT, until MISSION_ACK.
+    A reply missing for ``retry_s`` makes it send again what the rig has not acknowledged
+    (the count before the first request, else the last requested item); ``max_retries``
+    silent retries in a row abort with ``TimeoutError``. Download: MISSION_REQUEST_LIST,
+    then each item with MISSION_REQUEST_INT (``window`` requests in flight), then MISSION_ACK.
+    Messages of other types are skipped; duplicated or stale replies are ignored.
+    """
+
+    def __init__(self, conn, target=(1, 1), retry_s: float = 0.25, max_retries: int = 20, window: int = 1):
+        self.conn = conn
+        self.target = target
+        self.retry_s = retry_s
+        self.max_retries = max_retries
+        self.window = max(1, window)
+        self.retries = 0  # resends done by this client (figures for the lossy-link test)
+
+    def _wait(self, types, condition=None):
+        return recv(self.conn, types, self.retry_s, condition)
+
+    def upload(self, items, mission_type: int = 0) -> int:
+        """Send ``items`` (MissionItem, seq 0..N-1); returns the rig's MISSION_ACK type."""
+        from protocol.mission_items import item_to_int_message
+
+        ts, tc = self.target
+        msgs = [item_to_int_message(it, ts, tc) for it in items]
+        self.conn.mav.mission_count_send(ts, tc, len(msgs), mission_type)
+        last = None  # the seq the rig asked for most recently
+        sent_last_item = not msgs
+        silent = 0
+        while True:
+            m = self._wait(["MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"],
+                           lambda m: getattr(m, "mission_type", 0) == mission_type)
+            if m is None:
+                silent += 1
+                if silent > self.max_retries:
+                    raise TimeoutError(f"mission upload: no answer after {self.max_retries} retries")
+                self.retries += 1
+                if last is None:
+                    self.conn.mav.mission_count_send(ts, tc, len(msgs), mission_type)
+                else:
+                    self.conn.mav.send(msgs[last])
+                continue
+            silent = 0
+            if m.get_type() == "MISSION_ACK":
+                if m.type != 0 or sent_last_item:
+                    return m.type
+                continue  # an ACCEPTED before our last item: a stale ACK of an earlier operation
+            if m.seq < len(msgs):
+                last = m.seq
+                self.conn.mav.send(msgs[m.seq])
+                sent_last_item = sent_last_item or m.seq == len(msgs) - 1
+
+    def download(self, mission_type: int = 0) -> list:
+        """The rig's items (MissionItem) in seq order."""
+        from protocol.mission_items import item_from_message
+
+        ts, tc = self.target
+        silent = 0
+        self.conn.mav.mission_request_list_send(ts, tc, mission_type)
+        while True:
+            m = self._wait("MISSION_COUNT", lambda m: m.mission_type == mission_type)
+            if m is not None:
+                break
+            silent += 1
+            if silent > self.max_retries:
+                raise TimeoutError(f"mission download: no MISSION_COUNT after {self.max_retries} retries")
+            self.retries += 1
+            self.conn.mav.mission_request_list_send(ts, tc, mission_type)
+        count = m.count
+        got: dict = {}
+        sent: dict = {}
+        low = 0  # lowest seq not received yet
+        silent = 0
+        while low < count:
+            now = time.monotonic()
+            for seq in range(low, min(count, low + self.window)):
+                if seq not in got and now - sent.get(seq, -1e9) >= self.retry_s:
+                    self.retries += seq in sent
+                    self.conn.mav.mission_request_int_send(ts, tc, seq, mission_type)
+                    sent[seq] = now
+            m = self._wait("MISSION_ITEM_INT", lambda m: m.mission_type == mission_type)
+            if m is None:
+                silent += 1
+                if silent > self.max_retries:
+                    raise TimeoutError(f"mission download: item {low} missing after {self.max_retries} retries")
+                continue
+            silent = 0
+            if m.seq < count and m.seq not in got:
+                got[m.seq] = item_from_message(m)
+            while low < count and low in got:
+                low += 1
+        self.conn.mav.mission_ack_send(ts, tc, 0, mission_type)
+        return [got[s] for s in range(count)]

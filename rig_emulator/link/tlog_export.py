@@ -21,7 +21,9 @@ Reading: the rig's own figures (:meth:`SimResult.mean_errors`) are computed from
 controllers were fed (series ``pos``, ``euler``: the rig's estimates, or the truth with
 ``sensors.feedback = "ideal"``); a vehicle reports its estimates in ATTITUDE and
 LOCAL_POSITION_NED, so the export puts ``pos``/``euler`` there and the true state
-(``pos_true``/``euler_true``) in SIM_STATE. HILMS_LOAD_CELLS and its NAMED_VALUE_FLOAT
+(``pos_true``/``euler_true``; the log has no true velocity and body rates, SIM_STATE
+carries the recorded ``vel``/``omega`` there) in SIM_STATE. The live rig does the same
+(its snapshot's ``true_*`` fields). HILMS_LOAD_CELLS and its NAMED_VALUE_FLOAT
 mirror carry the filtered load-cell thrusts (``thrust_meas``). A waypoint scenario's
 mission is written first as MISSION_COUNT + MISSION_ITEM_INT (MAV_FRAME_LOCAL_NED, the
 switching radius in param2), as a ground station's log of a mission download holds it.
@@ -29,7 +31,6 @@ switching radius in param2), as a ground station's log of a mission download hol
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import struct
@@ -128,14 +129,14 @@ def _t(v) -> tuple:
     return tuple(float(a) for a in np.atleast_1d(v))
 
 
-def row_snapshots(series: dict, i: int, guidance: str) -> tuple:
-    """(reported, true) snapshots of log row ``i``: estimates as the rig reports them, and the truth."""
+def row_snapshot(series: dict, i: int, guidance: str) -> RigSnapshot:
+    """The snapshot of log row ``i``: the rig's estimates as it reports them, the truth in ``true_*``."""
     s = series
     euler = s["euler"][i]
     nan3 = (math.nan,) * 3
     pos_des = s["pos_des"][i]
     attitude_mode = s["mode"][i] == 1.0 or not np.all(np.isfinite(pos_des))
-    reported = RigSnapshot(
+    return RigSnapshot(
         time_s=float(s["t"][i]), armed=True, position=_t(s["pos"][i]), velocity=_t(s["vel"][i]),
         quaternion=_quat_of(euler), euler=_t(euler), euler_rates=_t(s["euler_rate"][i]), body_rates=_t(s["omega"][i]),
         position_target=nan3 if attitude_mode else _t(pos_des),
@@ -144,10 +145,9 @@ def row_snapshots(series: dict, i: int, guidance: str) -> tuple:
         thrusts=_t(s["thrust_meas"][i]), thrust_commands=(math.nan,) * 4, voltage_commands=_t(s["v_cmd"][i]),
         rotor_speeds=(math.nan,) * 4, u=_t(s["u"][i]), sliding_surfaces=_t(s["s"][i]),
         flags=int(s["flags"][i]) if math.isfinite(s["flags"][i]) else 0, guidance=guidance,
-        waypoint_index=int(s["waypoint"][i]) if math.isfinite(s["waypoint"][i]) else 0, mission_done=False)
-    true = dataclasses.replace(reported, position=_t(s["pos_true"][i]), euler=_t(s["euler_true"][i]),
-                               quaternion=_quat_of(s["euler_true"][i]))
-    return reported, true
+        waypoint_index=int(s["waypoint"][i]) if math.isfinite(s["waypoint"][i]) else 0, mission_done=False,
+        true_position=_t(s["pos_true"][i]), true_velocity=_t(s["vel"][i]),
+        true_quaternion=_quat_of(s["euler_true"][i]), true_body_rates=_t(s["omega"][i]))
 
 
 def mission_messages(cfg, sysid: int = 1) -> list:
@@ -180,7 +180,7 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1):
     guidance = cfg["guidance.type"]
     next_second = -math.inf
     for k in range(n):
-        snap, true = row_snapshots(series, k, guidance)
+        snap = row_snapshot(series, k, guidance)
         t = snap.time_s
         if k == 0:
             for msg in mission_messages(cfg, sysid):
@@ -193,7 +193,7 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1):
             out = build(snap, ctx)
             for msg in out if isinstance(out, list) else [out]:
                 yield t, msg
-        yield t, P.sim_state(true, ctx)
+        yield t, P.sim_state(snap, ctx)
 
 
 def export_tlog(result, path, home: Home = DEFAULT_HOME, sysid: int = 1, epoch_s: float = 0.0) -> int:

@@ -82,7 +82,7 @@ def draw_load_cells(cfg: dict, rng: np.random.Generator) -> LoadCellTruth:
     return LoadCellTruth(zero, c, kernel)
 
 
-@jit
+@jit(inline="always")
 def sample_load_cells(thrust_N, rotor_speed_rad_s, k, fault_mode, fault_magnitude, rng, raw_out):
     """Raw counts of every cell for the motors' thrusts [N] and rotor speeds [rad/s].
 

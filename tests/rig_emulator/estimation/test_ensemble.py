@@ -51,3 +51,11 @@ def test_step_health_mask_and_rates():
     v[1, 2] = v[0, 2]
     assert ensemble_step(v, SAMPLED_INERTIAL, p, s, out) == 1 << 1  # mag not resampled: flag kept
     assert ensemble_step(v, SAMPLED_INERTIAL | SAMPLED_MAG, p, s, out) == 0
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.floats(-1e6, 1e6), min_size=5, max_size=5))
+def test_median_of_five_network_equals_numpy(values):
+    from rig_emulator.estimation.ensemble import _median5
+
+    assert _median5(*values) == float(np.median(values))

@@ -108,7 +108,7 @@ def test_set_mode_px4_layout(client):
     base = M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
     assert command(client, M.MAV_CMD_DO_SET_MODE, base, 7).result == ACCEPTED  # STABILIZED
     assert _next_message(client).custom_mode == 7 << 16
-    assert command(client, M.MAV_CMD_DO_SET_MODE, base, 4, 4).result == UNSUPPORTED  # AUTO.MISSION: mission issue
+    assert command(client, M.MAV_CMD_DO_SET_MODE, base, 4, 4).result == DENIED  # AUTO.MISSION without a mission
     assert command(client, M.MAV_CMD_DO_SET_MODE, base, 3).result == ACCEPTED  # POSCTL
     assert _next_message(client).custom_mode == 3 << 16
     assert command(client, M.MAV_CMD_DO_SET_MODE, 0, 3).result == DENIED

@@ -1,0 +1,103 @@
+"""Ground-driven waypoint flight: the 8 cm switching of Sec. 4-4 run from the ground.
+
+For each waypoint the tool streams position targets (SET_POSITION_TARGET_LOCAL_NED) along
+the time-parameterised virtual line from where the vehicle was when the leg began to the
+waypoint, and switches to the next waypoint when the vehicle's reported position
+(LOCAL_POSITION_NED) is within the switching radius - with the rig's own functions
+(:mod:`protocol.waypoint_switching`: ``leg_duration``, ``line_setpoint``,
+``waypoint_reached``). Time is the vehicle's clock (``time_boot_ms`` of LOCAL_POSITION_NED),
+so the run is the same at any speed-up of the rig. One set-point goes out per position
+report; the vehicle holds the last one between reports.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from gcs_tools.errors import OperationError
+from gcs_tools.link import Link
+from protocol.dialect import mavlink as M
+from protocol.frames import enu_to_ned, ned_to_enu
+from protocol.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
+
+POSITION_ONLY = (M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMASK_VY_IGNORE
+                 | M.POSITION_TARGET_TYPEMASK_VZ_IGNORE | M.POSITION_TARGET_TYPEMASK_AX_IGNORE
+                 | M.POSITION_TARGET_TYPEMASK_AY_IGNORE | M.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+                 | M.POSITION_TARGET_TYPEMASK_YAW_IGNORE | M.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE)
+DEFAULT_SPEED = 0.5  # m/s, the rig's guidance.speed
+DEFAULT_MIN_LEG_TIME = 1.0  # s, the rig's guidance.min_leg_time
+DEFAULT_POSITION_HZ = 20.0
+
+
+@dataclass(frozen=True)
+class Reached:
+    index: int
+    t_s: float  # vehicle time (time_boot_ms) when the switching condition held
+    error_m: float  # distance to the waypoint then
+
+
+def _position(msg) -> np.ndarray:
+    return ned_to_enu([msg.x, msg.y, msg.z])
+
+
+def send_target(link: Link, t_ms: int, enu) -> None:
+    n, e, d = (float(v) for v in enu_to_ned(enu))
+    link.mav.set_position_target_local_ned_send(t_ms, link.target_system, link.target_component,
+                                                M.MAV_FRAME_LOCAL_NED, POSITION_ONLY, n, e, d,
+                                                0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_time: float = DEFAULT_MIN_LEG_TIME,
+        timeout_s: float = 600.0, link_timeout_s: float = 5.0, position_hz: float = DEFAULT_POSITION_HZ,
+        arm: bool = True, report=None) -> list[Reached]:
+    """Fly every waypoint in order; returns when the last is reached (OperationError on timeout/link loss).
+
+    ``points_enu`` (N, 3) world ENU metres about the vehicle's local origin, ``radii`` (N,)
+    switching radii (m), ``speed`` (m/s) and ``min_leg_time`` (s) size each virtual line.
+    ``report(Reached, n)`` is called at each waypoint.
+    """
+    pts = np.asarray(points_enu, dtype=float).reshape(-1, 3)
+    radii = np.broadcast_to(np.asarray(radii, dtype=float), (pts.shape[0],))
+    if link.target_system is None:
+        link.wait_vehicle()
+    if position_hz > 0:
+        link.set_message_rate(M.MAVLINK_MSG_ID_LOCAL_POSITION_NED, position_hz)
+    msg = link.recv("LOCAL_POSITION_NED", link_timeout_s)
+    if msg is None:
+        raise OperationError(f"no LOCAL_POSITION_NED from the vehicle within {link_timeout_s:g} s")
+    if arm and not link.is_armed():
+        link.arm()
+    deadline = time.monotonic() + timeout_s
+    reached: list[Reached] = []
+    sp_pos, sp_vel = np.zeros(3), np.zeros(3)
+    pos, t = _position(msg), msg.time_boot_ms * 1e-3
+    for i, (target, radius) in enumerate(zip(pts, radii)):
+        start, t0 = pos.copy(), t
+        duration = leg_duration(*start, *target, speed, min_leg_time)
+        while True:
+            line_setpoint(t, t0, duration, *start, *target, sp_pos, sp_vel)
+            send_target(link, int(t * 1e3), sp_pos)
+            if waypoint_reached(*pos, *target, radius):
+                r = Reached(i, t, float(np.linalg.norm(pos - target)))
+                reached.append(r)
+                if report is not None:
+                    report(r, pts.shape[0])
+                break
+            if time.monotonic() > deadline:
+                raise OperationError(f"timeout after {timeout_s:g} s: waypoint {i + 1}/{pts.shape[0]} not reached "
+                                     f"(error {np.linalg.norm(pos - target):.3f} m, radius {radius:g} m)")
+            msg = link.recv("LOCAL_POSITION_NED", link_timeout_s)
+            if msg is None:
+                raise OperationError(f"link lost: no LOCAL_POSITION_NED for {link_timeout_s:g} s "
+                                     f"(waypoint {i + 1}/{pts.shape[0]})")
+            pos, t = _position(msg), msg.time_boot_ms * 1e-3
+    return reached
+
+
+def format_reached(r: Reached, n: int, radius: float | None = None) -> str:
+    extra = "" if radius is None or not math.isfinite(radius) else f", radius {radius:g} m"
+    return f"waypoint {r.index + 1}/{n} reached at t = {r.t_s:.2f} s (error {r.error_m:.3f} m{extra})"
