@@ -6,4 +6,7 @@ bash scripts/setup-venv.sh test
 # Real ground-station clients the integration tests drive. MAVProxy's declared dependencies
 # pull a GUI stack (about 1 GB) that a console session does not use, hence --no-deps.
 .venv/bin/python -m pip install -q --no-deps "MAVProxy==1.8.75"
+# Compile the step loop once before the suite: the tests then load it from numba's on-disk
+# cache instead of compiling it in many processes at once.
+.venv/bin/python -m rig_emulator simulate --scenario hover --duration 0.1 > /dev/null
 exec .venv/bin/python -m pytest -n 2 -q "$@"

@@ -39,7 +39,7 @@ from collections import defaultdict
 
 from protocol.dialect import use_hilms_dialect
 
-START_TIMEOUT_S = 60.0
+START_TIMEOUT_S = 240.0  # a cold numba cache compiles the step loop first (about 1-2 min under load)
 NAN = float("nan")
 
 
