@@ -131,7 +131,7 @@ class MissionExecutor:
             return "mission refused: no mission (or no navigation item) stored"
         return None
 
-    def _refuse(self, reason: str, channel=None) -> tuple[int, list]:
+    def _refuse(self, reason: str) -> tuple[int, list]:
         return DENIED, self.srv.statustext_messages(M.MAV_SEVERITY_WARNING, reason)
 
     # --- commands -----------------------------------------------------------------------------
