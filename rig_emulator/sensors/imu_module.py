@@ -226,7 +226,7 @@ def _emit(A, offset, walk, sig, inv_lsb, lo, hi, m, s, x0, x1, x2, mode, magnitu
         raw_out[m, 3 * s + i] = c
 
 
-@jit(inline="always")
+@jit
 def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
                        rng, raw_out):
     """Sample every module's gyro+accel (if ``do_inertial``) and magnetometer (if ``do_mag``).

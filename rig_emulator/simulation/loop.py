@@ -38,7 +38,7 @@ from rig_emulator.sensors.sensor_step import SAMPLED_CELLS, sensors_step
 from rig_emulator.simulation import log_layout as L
 
 
-@jit(inline="always")
+@jit
 def _sense(k, x, pp, sp, ss, rng, omega_dot):
     """Sample the sensors due at step k and run the estimators on them."""
     for i in range(4):
@@ -113,7 +113,7 @@ def run_steps(
     return log_row
 
 
-@jit(inline="always")
+@jit
 def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd):
     phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
     row[L.T] = t
