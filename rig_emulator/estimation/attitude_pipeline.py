@@ -47,7 +47,7 @@ def attitude_estimation_step(sampled_mask, imu_raw, chain, work, att_out):
     """Calibrate, combine and filter the fresh IMU samples; returns the health mask."""
     if sampled_mask & SAMPLED_INERTIAL == 0:
         return work.health[0]
-    apply_imu_calibration(imu_raw, chain.cal, work.si)
+    apply_imu_calibration(imu_raw, chain.cal, work.si, 3 if sampled_mask & SAMPLED_MAG else 2)
     work.health[0] = ensemble_step(work.si, sampled_mask, chain.ensemble, work.ensemble, work.combined)
     complementary_step(work.combined[0], work.combined[1], work.combined[2],
                        sampled_mask & SAMPLED_MAG != 0, chain.cf, work.cf_state, att_out)

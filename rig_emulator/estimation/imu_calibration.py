@@ -70,12 +70,16 @@ def nominal_calibration(truth: ImuModulesTruth) -> ImuCalibration:
 
 
 @jit(inline="always")
-def apply_imu_calibration(raw, cal, out_si):
-    """Raw counts (n, 9) -> calibrated SI (n, 3, 3) ``[module, sensor, axis]`` (Sec. 4-1)."""
+def apply_imu_calibration(raw, cal, out_si, n_sensors=3):
+    """Raw counts (n, 9) -> calibrated SI (n, 3, 3) ``[module, sensor, axis]`` (Sec. 4-1).
+
+    ``n_sensors = 2`` calibrates gyro and accelerometer only (the magnetometer rows keep
+    their last values): the step loop does so on samples without a fresh magnetometer reading.
+    """
     G = cal.gain
     o = cal.offset_counts
     for m in range(raw.shape[0]):
-        for s in range(3):
+        for s in range(n_sensors):
             d0 = raw[m, 3 * s] - o[m, s, 0]
             d1 = raw[m, 3 * s + 1] - o[m, s, 1]
             d2 = raw[m, 3 * s + 2] - o[m, s, 2]

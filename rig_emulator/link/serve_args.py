@@ -41,4 +41,4 @@ def add_serve_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--speedup", type=parse_speedup, default=1.0, metavar="X",
                    help="simulated seconds per wall second; 0 or 'max' = as fast as possible (default 1)")
     p.add_argument("--duration", type=float, help="stop after this many simulated seconds (default: run until a signal)")
-    p.add_argument("--chunk-ms", type=float, default=5.0, help="simulated time per physics chunk (default %(default)s)")
+    p.add_argument("--chunk-ms", type=float, default=5.0, help="simulated time per physics chunk at real time; faster runs use up to 4x this (default %(default)s)")

@@ -41,12 +41,15 @@ from rig_emulator.simulation import log_layout as L
 @jit
 def _sense(k, x, pp, sp, ss, rng, omega_dot):
     """Sample the sensors due at step k and run the estimators on them."""
-    for i in range(4):
-        f = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
-        ss.thrust_true[i] = f
-        ss.rotor_speed[i] = rotor_speed(f, pp.kf)
+    if k % sp.suite.cells.decim == 0:  # the load cells need the motors' thrusts and speeds
+        for i in range(4):
+            f = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+            ss.thrust_true[i] = f
+            ss.rotor_speed[i] = rotor_speed(f, pp.kf)
     mask = sensors_step(k, x[6:10], x[10:13], omega_dot, ss.thrust_true, ss.rotor_speed,
                         sp.suite, ss.sstate, rng, ss.imu_raw, ss.cell_raw)
+    if mask == 0:
+        return
     ss.health[0] = attitude_estimation_step(mask, ss.imu_raw, sp.chain, ss.awork, ss.att_est)
     if mask & SAMPLED_CELLS:
         ss.health[1] = load_cell_filter_step(ss.cell_raw, sp.lcp, ss.lcs, ss.thrust_est)
