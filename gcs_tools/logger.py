@@ -14,8 +14,6 @@ value (empty before the first). Written to a temporary file and moved into place
 from __future__ import annotations
 
 import csv
-import os
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -23,6 +21,7 @@ from pathlib import Path
 from gcs_tools.errors import OperationError, UsageError
 from gcs_tools.link import Link, message_id
 from gcs_tools.tlog_read import iter_tlog
+from protocol.atomic_file import atomic_path
 from protocol.dialect import mavlink as M
 from rig_emulator.link.tlog_export import TlogWriter
 
@@ -67,11 +66,9 @@ def export_csv(tlog, csv_path, fields: list[str]) -> int:
     by_type: dict = {}
     for col, (m, f, i) in enumerate(parsed):
         by_type.setdefault(m, []).append((col, f, i))
-    csv_path = Path(csv_path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{csv_path.name}.", suffix=".tmp", dir=csv_path.parent)
     rows = 0
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
+    with atomic_path(csv_path) as tmp:
+        with open(tmp, "w", newline="", encoding="utf-8") as fh:
             w = csv.writer(fh)
             w.writerow(["timestamp", *headers])
             for msg in iter_tlog(tlog, set(by_type)):
@@ -90,13 +87,6 @@ def export_csv(tlog, csv_path, fields: list[str]) -> int:
                 if hit:
                     w.writerow([f"{msg._timestamp:.6f}", *latest])
                     rows += 1
-        os.replace(tmp, csv_path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
     return rows
 
 

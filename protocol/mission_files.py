@@ -32,13 +32,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from protocol.atomic_file import atomic_write_text
 from protocol.dialect import mavlink as M
 
 WPL_HEADER = "QGC WPL 110"
@@ -477,24 +476,6 @@ def load_mission(path) -> Mission:
 
 def mission_text(mission: Mission, path) -> str:
     return write_plan(mission) if file_format(path) == "plan" else write_wpl(mission)
-
-
-def atomic_write_text(path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same directory + os.replace."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 def save_mission(mission: Mission, path) -> None:

@@ -18,7 +18,7 @@ from rig_emulator.control.fuzzy import flc_axis
 from rig_emulator.control.pid import pid_axis
 from rig_emulator.control.reference_filter import reference_step, wrap_angle
 from rig_emulator.control.smc import smc_attitude, switch
-from rig_emulator.control.strategies import FLC, PID, SMC
+from rig_emulator.control.strategies import FLC, SMC
 from rig_emulator.control.thrust_direction import collective_thrust, desired_tilt
 from rig_emulator.physics.motors import rotor_speed, voltage_for_thrust
 

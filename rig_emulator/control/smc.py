@@ -70,8 +70,7 @@ def smc_attitude(e, de, acc_des, phi, theta, dphi, dtheta, wx, wy, wz, omega_r, 
     sth = math.sin(theta)
     cth = math.cos(theta)
     tth = sth / cth
-    # Euler-frame body rates
-    p = wx
+    # Euler-frame body rates (the roll rate wx does not enter W' omega_Q)
     q = -wy
     r = -wz
     # W' omega_Q with W = [[1, s t, c t], [0, c, -s], [0, s/c, c/c]] (phi, theta)

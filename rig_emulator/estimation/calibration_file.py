@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from protocol.atomic_file import atomic_path
 
 from rig_emulator.estimation.imu_calibration import ImuCalibration
 from rig_emulator.estimation.load_cell_calibration import LoadCellCalibration
@@ -46,17 +47,9 @@ def save_calibration(path: str | os.PathLike, cal: ImuCalibration | LoadCellCali
     doc["format_version"] = FORMAT_VERSION
     doc["procedure"] = _plain(cal.procedure)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="utf-8") as fh:
             json.dump(doc, fh, indent=1)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path
 
 

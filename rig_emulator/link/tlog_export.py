@@ -34,12 +34,11 @@ from __future__ import annotations
 import math
 import os
 import struct
-import tempfile
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
+from protocol.atomic_file import atomic_path
 from protocol.dialect import mavlink as M
 from protocol.frames import enu_to_ned
 from protocol.geodesy import Home
@@ -202,22 +201,9 @@ def export_tlog(result, path, home: Home = DEFAULT_HOME, sysid: int = 1, epoch_s
     Record timestamps are ``epoch_s`` + simulated time (default: the Unix epoch, so the same
     run gives the same bytes).
     """
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    try:
-        os.chmod(tmp, 0o666 & ~umask)
+    with atomic_path(path) as tmp:
         with TlogWriter(tmp, srcSystem=sysid) as w:
             for t, msg in iter_messages(result, home, sysid):
                 w.write(msg, epoch_s + t)
             count = w.count
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
     return count

@@ -183,7 +183,6 @@ def draw_imu_modules(cfg: dict, rng: np.random.Generator, physics_dt_s: float = 
         e = _bounded_normal(rng, mag["soft_iron"], (3, 3))
         soft[m] = np.eye(3) + 0.5 * (e + e.T)
         A[m, MAG] = A[m, MAG] @ soft[m]
-    dt_inertial = samp["gyro_accel_decimation"] * physics_dt_s
     dt_mag = samp["mag_decimation"] * physics_dt_s
     kernel = ImuKernel(
         n_modules=n,
