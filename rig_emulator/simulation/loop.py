@@ -38,7 +38,7 @@ from rig_emulator.sensors.sensor_step import SAMPLED_CELLS, sensors_step
 from rig_emulator.simulation import log_layout as L
 
 
-@jit
+@jit(inline="always")
 def _sense(k, x, pp, sp, ss, rng, omega_dot):
     """Sample the sensors due at step k and run the estimators on them."""
     if k % sp.suite.cells.decim == 0:  # the load cells need the motors' thrusts and speeds
@@ -73,7 +73,8 @@ def run_steps(
     psi = 0.0
     for k in range(k_start, k_start + n_steps):
         t = k * dt
-        if sp.simulate:
+        if sp.simulate and (k % sp.suite.imu.decim_inertial == 0 or k % sp.suite.imu.decim_mag == 0
+                            or k % sp.suite.cells.decim == 0):
             _sense(k, x, pp, sp, ss, rng, work[0, 10:13])
         if not armed:
             for i in range(4):
