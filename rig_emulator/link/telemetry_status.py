@@ -53,7 +53,9 @@ def sensor_health_bits(snap, ctx) -> int:
     """SYS_STATUS health: a sensor bit is healthy while every module's device of that kind is."""
     r = ctx.readings(snap)
     imu_ok = all(r.imu_healthy)
-    health = ALWAYS_ON | CONTROL_BITS
+    # The rig has no geofence, so none can be breached: ground stations such as MAVProxy read a
+    # cleared GEOFENCE health bit as "fence breach" whether or not the fence is present.
+    health = ALWAYS_ON | CONTROL_BITS | M.MAV_SYS_STATUS_GEOFENCE
     if imu_ok:
         health |= GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2
     if imu_ok and all(r.load_healthy):

@@ -1,8 +1,9 @@
 """QGC WPL 110 files through pymavlink's ``mavwp`` loader and MAVProxy's ``wp load`` / ``wp list``.
 
 MAVProxy uploads line 0 of the file (ArduPilot's home line) as item 0; under the rig's
-default (PX4) convention it is a waypoint at home, flown like the others (``MIS_ITEM0_HOME``
-is covered in test_link_mission_protocol.py). MAVProxy is driven through its stdin and
+default (PX4) convention it is a waypoint at home, flown like the others; MAVProxy's
+``param set MIS_ITEM0_HOME 1`` switches the rig to ArduPilot's convention (its effect on
+uploads is covered in test_link_mission_protocol.py). MAVProxy is driven through its stdin and
 judged by its output (see test_link_mavproxy.py)."""
 
 import subprocess
@@ -95,6 +96,16 @@ def test_mavproxy_wp_load_and_list(tmp_path):
             listing = "".join(out.all)
             assert "16 3 35.7000200000 51.4000000000 2.000000" in listing, listing
             assert "178 3 " in listing and "21 3 " in listing
+            # MAVProxy users switch the rig to ArduPilot's item-0-is-home convention themselves
+            proc.stdin.write("param set MIS_ITEM0_HOME 1\n")
+            shown = None
+            for _ in range(20):  # MAVProxy shows its cache; it changes when the rig's PARAM_VALUE echo arrives
+                proc.stdin.write("param show MIS_ITEM0_HOME\n")
+                proc.stdin.flush()
+                shown = out.wait_for(r"MIS_ITEM0_HOME\s+1(\.0)?\s*$", 1.0)
+                if shown is not None:
+                    break
+            assert shown is not None, "".join(out.all)
             before_exit = "".join(out.all)
             proc.stdin.write("exit\n")
             proc.stdin.close()
