@@ -9,10 +9,12 @@ term arrays. scikit-fuzzy is configured to reproduce our center-average defuzzif
   (so its linear interpolation is exact);
 * product AND (``Rule(..., and_func=np.multiply)``) and sum accumulation
   (``Consequent.accumulation_method = np.add``: a rule fired twice counts twice);
-* output terms: narrow rectangles centred on our output centers (half-width
-  :data:`OUT_HALF_WIDTH_FRAC` of the spacing, ramps :data:`OUT_RAMP_FRAC` of it), tall
-  enough (:data:`OUT_HEIGHT`) that a summed activation above 1 is never cut; the centroid
-  of such sets is the center average of the activations.
+* output terms: narrow unit-height rectangles centred on our output centers (half-width
+  :data:`OUT_HALF_WIDTH_FRAC` of the spacing, ramps :data:`OUT_RAMP_FRAC` of it); the
+  centroid of such sets is the center average of the activations. skfuzzy caps a term's
+  (summed) activation at the set's height 1, so every rule's consequent carries the weight
+  :data:`ACTIVATION_SCALE` (``u[term] % ACTIVATION_SCALE``): the summed activations stay
+  below 1 and the centroid, a ratio, does not change.
 
 The skfuzzy probe evaluates a grid of inputs over the whole universe and reports the
 largest difference from our output on it (``max_abs_diff``).
@@ -39,8 +41,9 @@ AXIS_D1 = (math.radians(1.8), math.radians(7.0), 0.05)
 #: Output rectangles: half-width and ramp width as fractions of the output-center spacing.
 OUT_HALF_WIDTH_FRAC = 0.01
 OUT_RAMP_FRAC = 1e-9
-#: Height of the output rectangles (> any summed activation, which is at most ~4 here).
-OUT_HEIGHT = 100.0
+#: Weight of every rule's consequent, keeping summed activations below skfuzzy's cap of 1
+#: (the summed strength of all 49 rules is (sum mu_e)(sum mu_de), at most (11/6)^2 ~ 3.4 here).
+ACTIVATION_SCALE = 0.0625
 #: The universe of an input extends this many ``d1`` beyond the outermost term edge.
 INPUT_MARGIN_D1 = 1.0
 
@@ -74,7 +77,7 @@ def input_universe(terms: np.ndarray, n: int = 201, margin: float | None = None)
 
 
 def output_sets(out_centers: np.ndarray, half_width_frac: float = OUT_HALF_WIDTH_FRAC,
-                ramp_frac: float = OUT_RAMP_FRAC, height: float = OUT_HEIGHT):
+                ramp_frac: float = OUT_RAMP_FRAC, height: float = 1.0):
     """Universe and per-term membership arrays of narrow rectangles around ``out_centers``.
 
     Returns ``(universe, mfs)`` with ``mfs`` of shape ``(len(out_centers), len(universe))``:
@@ -141,7 +144,7 @@ def build_skfuzzy(axis, rule_table):
     u.accumulation_method = np.add
     u.defuzzify_method = "centroid"
     rules = [
-        ctrl.Rule(e[INPUT_TERMS[i]] & de[INPUT_TERMS[j]], u[OUTPUT_TERMS[int(rule_table[j, i])]],
+        ctrl.Rule(e[INPUT_TERMS[i]] & de[INPUT_TERMS[j]], u[OUTPUT_TERMS[int(rule_table[j, i])]] % ACTIVATION_SCALE,
                   and_func=np.multiply)
         for j in range(len(INPUT_TERMS)) for i in range(len(INPUT_TERMS))
     ]
@@ -238,7 +241,7 @@ def flc_vs_skfuzzy(stats: dict[str, ProbeStats]) -> list[Metric]:
         ours.metric("batch_s", f"FLC batch of {n:,} inputs (flc_eval_many)", "s"),
         Metric(f"scikit-fuzzy {n:,} calls (per call x N)", float(np.median(sk_batch)), "s",
                None, (), min(sk_batch), max(sk_batch)),
-        Metric(f"speed-up, batch of {n:,}", float(np.median(batch_ratios)), "x", SKFUZZY_PROBE,
+        Metric(f"speed-up, batch of {n:,}", float(np.median(batch_ratios)), "x", FLC_PROBE,
                (), min(batch_ratios), max(batch_ratios),
                "equals the compiled per-evaluation speed-up (same timings)"),
         ours.metric("first_call_s", "FLC first calls (compile or cache load)", "s"),
