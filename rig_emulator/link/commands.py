@@ -113,26 +113,27 @@ def _get_interval(cmd, srv, channel):
     return ACCEPTED, [M.MAVLink_message_interval_message(message_id=msg_id & 0xFFFF, interval_us=interval)]
 
 
+def _act(srv, what: str, action, *args, done: str = "", severity: int = M.MAV_SEVERITY_INFO):
+    """Run a rig action: ACCEPTED (with an optional STATUSTEXT ``done``), or DENIED with the reason."""
+    try:
+        action(*args)
+    except ValueError as exc:
+        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"{what} rejected: {exc}")
+    return ACCEPTED, srv.statustext_messages(severity, done) if done else []
+
+
 def _shock(cmd, srv, channel):
     arm, torque, duration = cmd.int_param(1), cmd.p(2), cmd.p(3)
     if arm is None or torque is None or duration is None:
         return DENIED, []
-    try:
-        srv.rig.apply_shock(arm, torque, duration)
-    except ValueError as exc:
-        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"shock rejected: {exc}")
-    return ACCEPTED, []
+    return _act(srv, "shock", srv.rig.apply_shock, arm, torque, duration)
 
 
 def _extra_mass(cmd, srv, channel):
     arm, mass, distance = cmd.int_param(1), cmd.p(2), cmd.p(3)
     if arm is None or mass is None or distance is None:
         return DENIED, []
-    try:
-        srv.rig.set_extra_mass(arm, mass, distance)
-    except ValueError as exc:
-        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"extra mass rejected: {exc}")
-    return ACCEPTED, []
+    return _act(srv, "extra mass", srv.rig.set_extra_mass, arm, mass, distance)
 
 
 def _calibration(cmd, srv, channel):
@@ -140,11 +141,7 @@ def _calibration(cmd, srv, channel):
     if not any(v == 1.0 for v in wants):
         # other PREFLIGHT_CALIBRATION targets (baro, radio, airspeed, ...) do not exist on the rig
         return UNSUPPORTED, []
-    try:
-        srv.rig.recalibrate()
-    except ValueError as exc:
-        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"calibration refused: {exc}")
-    return ACCEPTED, srv.statustext_messages(M.MAV_SEVERITY_INFO, "IMU calibration done (Levenberg-Marquardt)")
+    return _act(srv, "calibration", srv.rig.recalibrate, done="IMU calibration done (Levenberg-Marquardt)")
 
 
 _FAULT_NAMES = {M.HILMS_FAULT_NONE: "none", M.HILMS_FAULT_STUCK: "stuck", M.HILMS_FAULT_DEAD: "dead",
@@ -165,12 +162,9 @@ def _sensor_fault(cmd, srv, channel):
     mode = _FAULT_NAMES.get(fault)
     if mode is None:
         return UNSUPPORTED, []
-    try:
-        srv.rig.set_sensor_fault(sensor, unit, mode, magnitude)
-    except ValueError as exc:
-        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"sensor fault rejected: {exc}")
     label = f"IMU module {index}" if sensor == "imu" else f"load cell {index}"
-    return ACCEPTED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"{label}: fault {mode} injected")
+    return _act(srv, "sensor fault", srv.rig.set_sensor_fault, sensor, unit, mode, magnitude,
+                done=f"{label}: fault {mode} injected", severity=M.MAV_SEVERITY_WARNING)
 
 
 HANDLERS = {

@@ -352,9 +352,12 @@ class LiveRig:
 
     def set_sensor_fault(self, sensor: str, index: int, mode: str, magnitude: float = 0.0) -> None:
         """Inject (or with mode 'none' clear) a fault on IMU module ``index`` or load cell ``index``."""
+        self._require_sensors()
+        self.sim.set_sensor_fault(sensor, index, mode, magnitude)
+
+    def _require_sensors(self) -> None:
         if not self.sim.sensing.params.simulate:
             raise ValueError("the sensor models are off (sensors.simulate = false)")
-        self.sim.set_sensor_fault(sensor, index, mode, magnitude)
 
     def recalibrate(self) -> None:
         """Rerun the IMU calibration procedure (Sec. 4-1) and apply the new result.
@@ -365,12 +368,10 @@ class LiveRig:
         """
         if self.sim.armed:
             raise ValueError("calibration needs the rig disarmed and still")
-        sensing = self.sim.sensing
-        if not sensing.params.simulate:
-            raise ValueError("the sensor models are off (sensors.simulate = false)")
+        self._require_sensors()
         self._calibrations += 1
         rng = np.random.default_rng(np.random.SeedSequence([self.cfg["sim.seed"], 0xCA1, self._calibrations]))
-        sensing.recalibrate_imu(self.cfg, rng)
+        self.sim.sensing.recalibrate_imu(self.cfg, rng)
 
     def set_extra_mass(self, arm: int, mass: float, distance: float) -> None:
         """Fig. 15: put (or with mass 0 remove) a point mass on arm 1..4 at ``distance`` from the joint."""
