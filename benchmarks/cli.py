@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 
 from .harness import BenchmarkError, render_report, run_suite, write_json
@@ -29,6 +31,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="JSON results file (default: bench-results.json in the current directory)")
     ap.add_argument("--timeout", type=float, default=900.0, metavar="S",
                     help="limit per probe subprocess, seconds (default 900)")
+    ap.add_argument("--scheduler", metavar="ADDRESS",
+                    help="many-rigs: also run each sweep on this Dask cluster (tcp://HOST:PORT, or 'local' for a "
+                         "LocalCluster with one worker process per core)")
     ap.add_argument("--list", action="store_true", help="list benchmarks and their probes, then exit")
     return ap
 
@@ -43,14 +48,21 @@ def main(argv: list[str] | None = None) -> int:
             for p in b.probes:
                 print(f"    probe {p}: {REGISTRY.probes[p].description}")
         return 0
+    if args.scheduler:
+        from .many_rigs import SCHEDULER_ENV
+
+        os.environ[SCHEDULER_ENV] = args.scheduler  # the probes' subprocesses inherit it
     only = [n.strip() for item in (args.only or []) for n in item.split(",") if n.strip()]
     repeat = args.repeat if args.repeat is not None else (QUICK_REPEAT if args.quick else DEFAULT_REPEAT)
+    # SIGTERM ends the run like Ctrl-C: the harness' clean-up (temporary numba caches) still runs
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     try:
         doc = run_suite(REGISTRY, only=only or None, repeat=repeat, quick=args.quick,
                         timeout=args.timeout)
     except BenchmarkError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    doc["settings"]["scheduler"] = args.scheduler
     print(render_report(doc))
     path = write_json(doc, args.out)
     print(f"\nresults written to {path}")

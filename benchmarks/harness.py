@@ -201,6 +201,7 @@ class Probe:
     params: Mapping[str, Any]
     quick_params: Mapping[str, Any]
     description: str = ""
+    cache: str | None = None  # probes naming the same cache group share one numba cache directory
 
     @property
     def target(self) -> tuple[str, str]:
@@ -241,6 +242,7 @@ class Registry:
         params: Mapping[str, Any] | None = None,
         quick: Mapping[str, Any] | None = None,
         description: str = "",
+        cache: str | None = None,
     ) -> Probe:
         if name in self.probes:
             raise BenchmarkError(f"probe {name!r} is registered twice")
@@ -251,7 +253,7 @@ class Registry:
                 json.dumps(p)
             except TypeError as exc:
                 raise BenchmarkError(f"probe {name!r}: parameters must be JSON-serialisable: {exc}") from None
-        probe = Probe(name, func, params, quick_params, description)
+        probe = Probe(name, func, params, quick_params, description, cache)
         probe.target  # validates importability early
         self.probes[name] = probe
         return probe
@@ -273,11 +275,12 @@ class Registry:
         return bench
 
     def probe(self, name: str, params: Mapping[str, Any] | None = None,
-              quick: Mapping[str, Any] | None = None, description: str = ""):
+              quick: Mapping[str, Any] | None = None, description: str = "", cache: str | None = None):
         """Decorator form of :meth:`add_probe`; returns the function unchanged."""
 
         def deco(func):
-            self.add_probe(name, func, params, quick, description or (func.__doc__ or "").strip().split("\n")[0])
+            self.add_probe(name, func, params, quick, description or (func.__doc__ or "").strip().split("\n")[0],
+                           cache)
             return func
 
         return deco
@@ -371,6 +374,22 @@ def paired_ratio_metric(subject: ProbeStats, key: str, reference: ProbeStats, re
         )
     rs = [ratio(x, y) for x, y in zip(a, b)]
     return Metric(name, median(rs), unit, reference.name, tuple(targets), min(rs), max(rs), note)
+
+
+def paired_difference_metric(subject: ProbeStats, key: str, reference: ProbeStats, ref_key: str,
+                             name: str, unit: str, targets: Sequence[Target] = (), note: str = "") -> Metric:
+    """``subject[key] - reference[ref_key]`` repetition by repetition (median, min..max).
+
+    For figures where the excess over a floor means more than a ratio (e.g. jitter in ms).
+    """
+    a = subject.values(key)
+    b = reference.values(ref_key)
+    if len(a) != len(b) or not a:
+        raise BenchmarkError(
+            f"cannot pair {subject.name!r} ({len(a)} runs) with {reference.name!r} ({len(b)} runs)"
+        )
+    ds = [x - y for x, y in zip(a, b)]
+    return Metric(name, median(ds), unit, reference.name, tuple(targets), min(ds), max(ds), note)
 
 
 # --------------------------------------------------------------------------------------
@@ -505,11 +524,12 @@ def run_suite(
     cache_root = tempfile.mkdtemp(prefix="hilms-bench-numba-")
     # One numba cache directory per probe, empty at the start of the suite run: its
     # repetition 1 compiles cold (whatever other probes compiled before), later
-    # repetitions load that probe's cache.
+    # repetitions load that probe's cache. Probes of one cache group (``cache=``; those
+    # that do not measure compilation) share a directory, so only the first compiles.
     envs = {}
     for i, p in enumerate(probes):
-        cache = os.path.join(cache_root, f"probe-{i}")
-        os.mkdir(cache)
+        cache = os.path.join(cache_root, f"group-{p.cache}" if p.cache else f"probe-{i}")
+        os.makedirs(cache, exist_ok=True)
         envs[p.name] = {**os.environ, "HILMS_NUMBA_CACHE": cache, "NUMBA_CACHE_DIR": cache}
     try:
         for rep in range(repeat):
@@ -535,6 +555,7 @@ def run_suite(
             "description": p.description,
             "function": ".".join(p.target),
             "params": p.params_for(quick),
+            "numba_cache": f"shared by group {p.cache!r}" if p.cache else "own",
             "runs": stats[p.name].runs,
             "error": errors.get(p.name),
             "varying_labels": varying_labels(stats[p.name].runs),
@@ -551,6 +572,8 @@ def run_suite(
                 entry.update(status="ok", metrics=[m.to_json() for m in metrics], error=None)
             except BenchmarkError as exc:
                 entry.update(status="error", metrics=[], error=str(exc))
+            except Exception as exc:  # noqa: BLE001 - a summary's bug must not lose the other benchmarks
+                entry.update(status="error", metrics=[], error=f"summary failed: {type(exc).__name__}: {exc}")
         doc["benchmarks"][b.name] = entry
     return doc
 

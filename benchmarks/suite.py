@@ -9,6 +9,8 @@ module here.
 from . import rotorpy_reference, rig_core  # noqa: F401  (registration side effects)
 from . import flc_vs_skfuzzy  # noqa: F401
 from . import cf_vs_ahrs  # noqa: F401
+from . import mavlink_link, jitter, memory  # noqa: F401
+from . import many_rigs  # noqa: F401
 from .harness import REGISTRY
 
 __all__ = ["REGISTRY"]

@@ -11,6 +11,12 @@ Commands (``rig-gcs COMMAND --help`` for each):
 * ``plot run.tlog -o DIR`` - PNG plots (attitude, XY path with the switching circles, XYZ,
   thrusts, load cells).
 * ``csv run.tlog --csv out.csv --fields ...`` - export chosen fields of a .tlog.
+* ``param list|get|set|save|load CONNECTION ...`` - the vehicle's parameters; QGroundControl
+  ``.params`` and MAVProxy ``NAME VALUE`` files (:mod:`gcs_tools.param_cli`).
+* ``stability [--json]`` - stability analysis of the FLC gains (Eq. 16-32): fitted planes, the LMI
+  of Eq. 32, the bound R2 of Eq. 31 (exit 1 when the LMI is infeasible; needs the ``analysis`` extra).
+* ``reproduce -o DIR`` - the paper's experiments, our figures and numbers next to the paper's, a
+  verdict on each claim (:mod:`gcs_tools.reproduce`, docs/REPRODUCTION.md).
 
 CONNECTION is a pymavlink connection string: ``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``, ...
 
@@ -296,6 +302,14 @@ def cmd_plot(args) -> int:
     return EXIT_OK
 
 
+# --- stability --------------------------------------------------------------------------------------------------
+
+def cmd_stability(args) -> int:
+    from gcs_tools.stability.command import run
+
+    return run(args)
+
+
 # --- parser ---------------------------------------------------------------------------------------------------------
 
 def _link_args(p) -> None:
@@ -374,6 +388,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="directory for the PNGs")
     p.add_argument("--mission", help="mission file for the XY plot's waypoints (default: the log's mission items)")
     p.set_defaults(func=cmd_plot)
+
+    p = sub.add_parser("stability", help="stability analysis of the FLC attitude gains (Eq. 16-32)",
+                       description="Fits the planes of Eq. 16 to the FLC surfaces, solves the LMI of Eq. 32 (cvxpy, "
+                                   "cross-checked with scipy) and computes R2 of Eq. 31. Exit 0 when the LMI derived "
+                                   "from Eq. 19-25 is feasible, 1 when it is not (the reason is printed) or cvxpy is "
+                                   "missing, 2 for bad parameters.")
+    from gcs_tools.stability.command import add_arguments as _stability_arguments
+
+    _stability_arguments(p)
+    p.set_defaults(func=cmd_stability)
+
+    from gcs_tools.param_cli import add_param_parser
+
+    add_param_parser(sub, _positive)  # rig-gcs param list|get|set|save|load
+
+    from gcs_tools.reproduce.cli import add_parser as add_reproduce_parser
+
+    add_reproduce_parser(sub)  # rig-gcs reproduce -o DIR (issue 7)
     return parser
 
 

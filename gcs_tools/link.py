@@ -11,6 +11,7 @@ import math
 import time
 
 from gcs_tools.errors import OperationError, UsageError
+from gcs_tools.stale_acks import StaleAcks
 from protocol.dialect import mavlink as M
 from protocol.dialect import use_hilms_dialect
 
@@ -41,6 +42,7 @@ class Link:
         self.target_system = target_system
         self.target_component = M.MAV_COMP_ID_AUTOPILOT1
         self.last_heartbeat = None
+        self.stale_acks = StaleAcks()
 
     @property
     def mav(self):
@@ -83,7 +85,10 @@ class Link:
 
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            msg = self.recv("HEARTBEAT", deadline - time.monotonic())
+            # A ground station's HEARTBEAT, once a second: a vehicle serving UDP (udpin) learns of a
+            # ground station only from what it sends.
+            self.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, M.MAV_STATE_ACTIVE)
+            msg = self.recv("HEARTBEAT", min(1.0, deadline - time.monotonic()))
             if msg is not None and is_vehicle(msg):
                 self.target_system = msg.get_srcSystem()
                 self.target_component = msg.get_srcComponent()
@@ -94,15 +99,21 @@ class Link:
     def command(self, cmd: int, *params, timeout: float = COMMAND_TIMEOUT_S, retries: int = COMMAND_RETRIES):
         """COMMAND_LONG with the command protocol's retries; returns the COMMAND_ACK result."""
         p = list(params) + [NAN] * (7 - len(params))
+        stale = self.stale_acks  # stale ACKs of earlier transmissions are not this command's answer
         for attempt in range(retries + 1):
             self.mav.command_long_send(self.target_system, self.target_component, cmd, attempt, *p)
-            ack = self.recv("COMMAND_ACK", timeout, lambda m: m.command == cmd)
+            sent = time.monotonic()
+            ack = self.recv("COMMAND_ACK", timeout, lambda m: m.command == cmd and stale.fresh(m))
             if ack is not None:
+                stale.consumed(ack)
                 if ack.result == M.MAV_RESULT_IN_PROGRESS:
-                    ack = self.recv("COMMAND_ACK", 10 * timeout,
-                                    lambda m: m.command == cmd and m.result != M.MAV_RESULT_IN_PROGRESS)
+                    ack = self.recv("COMMAND_ACK", 10 * timeout, lambda m: m.command == cmd and stale.fresh(m)
+                                    and m.result != M.MAV_RESULT_IN_PROGRESS)
                     if ack is None:
                         break
+                    stale.consumed(ack)
+                if attempt > 0:
+                    stale.absorb(self, cmd, sent + timeout)
                 return ack.result
         name = M.enums["MAV_CMD"][cmd].name if cmd in M.enums["MAV_CMD"] else str(cmd)
         raise OperationError(f"{name}: no COMMAND_ACK after {retries + 1} attempts")

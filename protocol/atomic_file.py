@@ -2,7 +2,8 @@
 
 Every file the project stores for a user (mission files, calibrations, exported tlogs, CSV
 exports) is written to a temporary file in the target's directory, flushed to disk, and
-moved over the target with ``os.replace``: readers see the old file or the new one.
+moved over the target with ``os.replace``, and the directory is synced so the rename
+itself survives a power cut: readers see the old file or the new one.
 """
 
 from __future__ import annotations
@@ -12,6 +13,18 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
+
+
+def fsync_dir(directory) -> None:
+    """Sync a directory's entries (a rename in it) to disk; a no-op where directories cannot be opened."""
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return  # e.g. Windows: directories cannot be opened; NTFS journals the rename
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 @contextmanager
@@ -33,6 +46,7 @@ def atomic_path(path) -> Iterator[Path]:
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, path)
+        fsync_dir(path.parent)
     except BaseException:
         try:
             os.unlink(tmp)

@@ -144,15 +144,21 @@ class Mission:
 
 # --- value checks shared by both formats ---------------------------------------------------------------------
 
+def _fits_float32(v: float) -> bool:
+    """True when ``v`` rounds to a finite float32 (so 3.4028235e+38, FLT_MAX as written, does)."""
+    with np.errstate(over="ignore"):
+        return bool(np.isfinite(np.float32(v)))
+
+
 def _check_item(item: MissionItem, source: str, where) -> MissionItem:
     if item.frame not in KNOWN_FRAMES:
         raise MissionFileError(source, where, f"frame {item.frame} is not a MAV_FRAME")
     if item.command not in KNOWN_COMMANDS:
         raise MissionFileError(source, where, f"command {item.command} is not a MAV_CMD")
     for name, v in zip(("param1", "param2", "param3", "param4"), item.params):
-        if math.isinf(v) or (not math.isnan(v) and abs(v) > np.finfo(np.float32).max):
+        if not (math.isnan(v) or _fits_float32(v)):
             raise MissionFileError(source, where, f"{name} = {v!r} does not fit a float32")
-    if not math.isfinite(item.z) or abs(item.z) > np.finfo(np.float32).max:
+    if not _fits_float32(item.z):
         raise MissionFileError(source, where, f"z = {item.z!r}: must be a finite float32")
     scale = xy_scale(item.frame)
     for name, v in (("x", item.x), ("y", item.y)):
@@ -362,6 +368,8 @@ def parse_plan(text: str, source: str = "<plan>") -> Mission:
         if not isinstance(sec, dict):
             raise MissionFileError(source, section, "expected an object")
         for key in keys:
+            if key in sec and not isinstance(sec[key], list):
+                raise MissionFileError(source, f"{section}.{key}", f"expected a list, got {json.dumps(sec[key])[:40]}")
             if sec.get(key):
                 raise MissionFileError(source, f"{section}.{key}",
                                        f"{len(sec[key])} {section} {key} given; the rig supports missions only "

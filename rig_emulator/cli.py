@@ -163,7 +163,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rig-emulator", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("serve", help="run the rig and serve MAVLink (the default command)")
+    p = sub.add_parser("serve", help="run the rig and serve MAVLink (the default command); keeps parameters and "
+                                     "the mission in ./rig-state; optional MAVLink 2 signing (see serve --help)")
     add_serve_args(p)
     _add_config_args(p)
     p.set_defaults(func=cmd_serve)

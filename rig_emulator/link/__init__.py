@@ -14,7 +14,15 @@ Layout (one concept per module):
 * :mod:`telemetry_*` - one builder per streamed message: snapshot -> message.
 * :mod:`streams` - which message goes out how often (per simulated time).
 * :mod:`params` / :mod:`param_service` - the parameter table and protocol.
-* :mod:`modes`, :mod:`commands`, :mod:`offboard`, :mod:`ftp` - the other microservices.
-* :mod:`server` - wiring and the paced loop; :mod:`serve` - the command line.
-* :mod:`testing` - start a rig on free ports from tests and scripts.
+* :mod:`modes`, :mod:`commands`, :mod:`offboard`, :mod:`ftp` - the other microservices;
+  :mod:`command_dedup` - a retried or duplicated command acts once.
+* :mod:`counters` / :mod:`link_status` - what the link received, dropped and why, and the
+  loop's step counters; sent to a client on request (NAMED_VALUE_INT).
+* :mod:`signing` (:mod:`signing_key`, :mod:`signing_clock`) - MAVLink 2 signing on every link.
+* :mod:`rig_state` (:mod:`state_dir`, :mod:`param_store`, :mod:`mission_store`) - what survives
+  a restart: parameters, the mission, the signing clock, written atomically.
+* :mod:`server` - wiring and the paced loop; :mod:`serve` (:mod:`serve_setup`) - the command line.
+* :mod:`testing` - start a rig on free ports from tests and scripts; :mod:`testing_relay` - a
+  lossy, laggy UDP relay; :mod:`testing_fuzz` / :mod:`testing_fuzz_session` - hostile frames,
+  the oracle of how the rig counts them, and a flood-and-check session (scripts/fuzz_link.py).
 """

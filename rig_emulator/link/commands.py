@@ -3,8 +3,9 @@
 Parameters arrive as floats; NaN means "unset" and becomes ``None`` before any handler
 sees it (nothing ever casts a NaN). A handler returns a MAV_RESULT and the messages to
 send to the requester after the ACK (e.g. the message MAV_CMD_REQUEST_MESSAGE asked for).
-A retry (``confirmation`` > 0) of the previous command of the same peer is ACKed with the
-previous result without acting twice. Unknown commands get MAV_RESULT_UNSUPPORTED.
+A retry (``confirmation`` > 0) or a duplicated frame of the sender's previous command is ACKed
+with the previous result without acting twice (:mod:`rig_emulator.link.command_dedup`).
+Unknown commands get MAV_RESULT_UNSUPPORTED.
 
 Supported: COMPONENT_ARM_DISARM, DO_SET_MODE, REQUEST_MESSAGE, REQUEST_AUTOPILOT_CAPABILITIES,
 SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MISSION_START and
@@ -12,19 +13,28 @@ DO_SET_MISSION_CURRENT (:mod:`rig_emulator.link.mission_exec`), PREFLIGHT_CALIBR
 gyro, or param2, magnetometer, or param5, accelerometer = 1: reruns the IMU calibration
 procedure of Sec. 4-1, disarmed only), MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
 MAV_CMD_HILMS_SENSOR_FAULT (IMU modules and load cells; motor faults are UNSUPPORTED).
+A shock outside the ranges of the config's ``disturbance.shocks`` entries (torque within
++-100 N m, duration in (0, 10] s) is DENIED with the reason; a calibration less than
+:data:`CALIBRATION_INTERVAL_S` after the previous one is TEMPORARILY_REJECTED (each run
+blocks the loop for about 0.1 s).
 """
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 from protocol.dialect import mavlink as M
+from rig_emulator.config.loader import ConfigError, check_value
+from rig_emulator.config.schema import SCHEMA
 from rig_emulator.link.mission_exec import MISSION_COMMANDS
 from rig_emulator.link.stream_table import ON_REQUEST, STREAMS
 
 ACCEPTED, DENIED, UNSUPPORTED, FAILED = (M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED,
                                          M.MAV_RESULT_UNSUPPORTED, M.MAV_RESULT_FAILED)
+SHOCK_SPEC = SCHEMA["disturbance.shocks"]
+CALIBRATION_INTERVAL_S = 2.0  # wall-clock seconds between two PREFLIGHT_CALIBRATION runs
 
 
 def _unset_nan(value: float):
@@ -36,16 +46,20 @@ class Command:
     command: int
     params: tuple  # 7 entries, None where unset (NaN)
     confirmation: int
+    sender: tuple = (0, 0)  # (system id, component id) of the sender
+    seq: int = -1  # MAVLink sequence number of the frame
 
     @classmethod
     def from_long(cls, msg) -> "Command":
         raw = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
-        return cls(msg.command, tuple(_unset_nan(p) for p in raw), msg.confirmation)
+        return cls(msg.command, tuple(_unset_nan(p) for p in raw), msg.confirmation,
+                   (msg.get_srcSystem(), msg.get_srcComponent()), msg.get_seq())
 
     @classmethod
     def from_int(cls, msg) -> "Command":
         raw = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
-        return cls(msg.command, tuple(_unset_nan(p) for p in raw), 0)
+        return cls(msg.command, tuple(_unset_nan(p) for p in raw), 0,
+                   (msg.get_srcSystem(), msg.get_srcComponent()), msg.get_seq())
 
     def p(self, i: int):
         """Parameter ``i`` (1..7), ``None`` when unset."""
@@ -126,6 +140,10 @@ def _shock(cmd, srv, channel):
     arm, torque, duration = cmd.int_param(1), cmd.p(2), cmd.p(3)
     if arm is None or torque is None or duration is None:
         return DENIED, []
+    try:  # the ranges of the config's disturbance.shocks entries (a torque of 1e30 N m made the physics NaN)
+        check_value("shock", SHOCK_SPEC, [{"t": 0.0, "arm": arm, "torque": torque, "duration": duration}])
+    except ConfigError as exc:
+        return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, f"shock rejected: {str(exc).removeprefix('shock[0].')}")
     return _act(srv, "shock", srv.rig.apply_shock, arm, torque, duration)
 
 
@@ -141,7 +159,15 @@ def _calibration(cmd, srv, channel):
     if not any(v == 1.0 for v in wants):
         # other PREFLIGHT_CALIBRATION targets (baro, radio, airspeed, ...) do not exist on the rig
         return UNSUPPORTED, []
-    return _act(srv, "calibration", srv.rig.recalibrate, done="IMU calibration done (Levenberg-Marquardt)")
+    # The procedure blocks the loop for about 0.1 s: back to back, calibrations would stall the control loop.
+    now = time.monotonic()
+    if now - srv.last_calibration < CALIBRATION_INTERVAL_S and not srv.snapshot().armed:  # armed: DENIED below
+        return M.MAV_RESULT_TEMPORARILY_REJECTED, srv.statustext_messages(
+            M.MAV_SEVERITY_WARNING, f"calibration rejected: the last one ran less than {CALIBRATION_INTERVAL_S:g} s ago")
+    result, follow = _act(srv, "calibration", srv.rig.recalibrate, done="IMU calibration done (Levenberg-Marquardt)")
+    if result == ACCEPTED:
+        srv.last_calibration = now
+    return result, follow
 
 
 _FAULT_NAMES = {M.HILMS_FAULT_NONE: "none", M.HILMS_FAULT_STUCK: "stuck", M.HILMS_FAULT_DEAD: "dead",
@@ -183,12 +209,19 @@ HANDLERS = {
 }
 
 
-def execute(cmd: Command, srv, channel) -> tuple[int, list]:
-    """Run one command for ``channel``; returns (MAV_RESULT, messages to send after the ACK)."""
-    last = channel.last_command
-    if cmd.confirmation > 0 and last is not None and last[0] == (cmd.command, cmd.params):
-        return last[1], []
+def execute(cmd: Command, srv, channel) -> tuple[int | None, list]:
+    """Run one command for ``channel``; returns (MAV_RESULT, messages to send after the ACK).
+
+    A retry of the sender's last command is answered with the earlier result without acting
+    again; a duplicated frame or a late first transmission gets neither action nor ACK
+    (result None) (:mod:`rig_emulator.link.command_dedup`)."""
+    now = time.monotonic()
+    earlier = srv.command_dedup.repeat_of(cmd, channel, now)
+    if earlier is not None:
+        srv.counters.drop("duplicate_command")
+        result, answer = earlier
+        return (result if answer else None), []
     handler = HANDLERS.get(cmd.command)
     result, follow = (UNSUPPORTED, []) if handler is None else handler(cmd, srv, channel)
-    channel.last_command = ((cmd.command, cmd.params), result)
+    srv.command_dedup.record(cmd, channel, result, now)
     return result, follow

@@ -56,6 +56,7 @@ class Endpoint(ABC):
     """One socket (or listening socket and its clients). Subclasses fill in the transport."""
 
     kind = ""
+    datagram = False  # True: every read is one datagram holding whole frames
 
     def __init__(self, spec: str):
         self.spec = spec
@@ -96,6 +97,8 @@ def _udp_socket() -> socket.socket:
 
 
 class _Udp(Endpoint):
+    datagram = True
+
     def _read(self) -> list[tuple]:
         out = []
         for _ in range(MAX_READS_PER_POLL):

@@ -27,6 +27,9 @@ Starting and stopping (PX4's interface, which MAVSDK and QGroundControl use):
 
 A new mission replaces the old one atomically; if the old one was being flown, the new one
 is flown from its first item at once. Clearing the mission while flying holds position.
+With a ``store`` (:mod:`rig_emulator.link.mission_store`) the new mission (or the cleared
+one) is stored first; when it cannot be, nothing changes and :meth:`MissionExecutor.replace`
+raises :class:`~rig_emulator.link.state_dir.StateWriteError`.
 
 Reports: MISSION_ITEM_REACHED (to every peer) each time a navigation item is reached (the
 switching radius test), MISSION_CURRENT on every change of item, state or mode and as a
@@ -55,8 +58,9 @@ ITEM0_HOME_KEY = "mission.item0_home"
 
 
 class MissionExecutor:
-    def __init__(self, server):
+    def __init__(self, server, store=None):
         self.srv = server
+        self.store = store  # save(items, home) before a change, or None
         self.rig = server.rig
         self.modes = server.modes
         self.items: tuple = ()
@@ -81,10 +85,12 @@ class MissionExecutor:
             self.plan = mission_plan(self.items, self.srv.ctx.home, self.item0_home)
         return self.plan
 
-    def replace(self, items) -> None:
+    def replace(self, items, persist: bool = True) -> None:
         """Store ``items`` (validated) as the mission; raises ValueError (nothing changes)."""
         items = tuple(items)
         plan = mission_plan(items, self.srv.ctx.home, self.item0_home)
+        if persist and self.store is not None:
+            self.store.save(items, self.srv.ctx.home)
         was_active = self.state == ACTIVE
         self.items, self.plan = items, plan
         self.current_seq = plan.first_seq if plan.count > plan.first_seq else 0

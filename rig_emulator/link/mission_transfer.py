@@ -18,7 +18,8 @@ Results (MISSION_ACK.type): ACCEPTED; NO_SPACE (more than :data:`MAX_ITEMS`);
 INVALID_SEQUENCE (an item beyond the announced count, a request beyond the mission);
 UNSUPPORTED / UNSUPPORTED_FRAME / INVALID_PARAMx for an item the rig cannot fly
 (:func:`protocol.mission_items.validate_item`, reason also in a STATUSTEXT); DENIED;
-OPERATION_CANCELLED. MISSION_COUNT 0 clears the mission.
+OPERATION_CANCELLED; ERROR when the new (or cleared) mission cannot be stored in the
+state directory (the previous one stays). MISSION_COUNT 0 clears the mission.
 
 Download: MISSION_REQUEST_LIST -> MISSION_COUNT -> MISSION_REQUEST_INT (answered with
 MISSION_ITEM_INT) or MISSION_REQUEST (answered with MISSION_ITEM) -> ... -> MISSION_ACK.
@@ -37,6 +38,7 @@ from dataclasses import dataclass, field
 
 from protocol.dialect import mavlink as M
 from protocol.mission_items import item_from_message, item_to_float_message, item_to_int_message, validate_item
+from rig_emulator.link.state_dir import StateWriteError
 
 RETRY_S = 0.25  # PX4: MAVLINK_MISSION_RETRY_TIMEOUT_DEFAULT
 GIVE_UP_S = 5.0  # PX4: MAVLINK_MISSION_PROTOCOL_TIMEOUT_DEFAULT
@@ -115,7 +117,8 @@ class MissionTransfer:
         self.upload = None
         self._completed.pop(channel, None)
         if n == 0:
-            self.executor.clear()
+            if not self._clear(channel, peer, MISSION):
+                return
             self.uploads_done += 1
             self._ack(channel, peer, M.MAV_MISSION_ACCEPTED)
             return
@@ -161,6 +164,9 @@ class MissionTransfer:
             return
         try:
             self.executor.replace(up.items[i] for i in range(up.count))
+        except StateWriteError as exc:
+            self._fail(M.MAV_MISSION_ERROR, str(exc))
+            return
         except ValueError as exc:
             self._fail(M.MAV_MISSION_INVALID, str(exc))
             return
@@ -226,11 +232,22 @@ class MissionTransfer:
     def clear_all(self, msg, channel) -> None:
         peer, mtype = self._peer(msg), msg.mission_type
         if mtype in (MISSION, M.MAV_MISSION_TYPE_ALL):
-            self.executor.clear()
+            if not self._clear(channel, peer, mtype):
+                return
         elif mtype not in (M.MAV_MISSION_TYPE_FENCE, M.MAV_MISSION_TYPE_RALLY):
             self._ack(channel, peer, M.MAV_MISSION_UNSUPPORTED, mtype)
             return
         self._ack(channel, peer, M.MAV_MISSION_ACCEPTED, mtype)
+
+    def _clear(self, channel, peer, mtype: int) -> bool:
+        """Clear the mission; False (answered with MISSION_ACK ERROR) when that cannot be stored."""
+        try:
+            self.executor.clear()
+        except StateWriteError as exc:
+            self._ack(channel, peer, M.MAV_MISSION_ERROR, mtype)
+            self.srv.statustext(channel, M.MAV_SEVERITY_ERROR, f"mission not cleared: {exc}")
+            return False
+        return True
 
     def set_current(self, msg, channel) -> None:
         result, follow = self.executor.set_current(msg.seq)

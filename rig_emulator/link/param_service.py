@@ -5,7 +5,9 @@
 * PARAM_SET: validated against the schema through :meth:`LiveRig.set_param`; accepted
   changes act on the running controller at the next step and are echoed with PARAM_VALUE
   to every peer; rejected ones are answered with PARAM_VALUE holding the unchanged value
-  plus a STATUSTEXT saying why.
+  plus a STATUSTEXT saying why. With a ``store`` (:mod:`rig_emulator.link.param_store`)
+  an accepted change is stored before it is echoed; one that cannot be stored is undone
+  and answered like a rejected one.
 """
 
 from __future__ import annotations
@@ -13,13 +15,15 @@ from __future__ import annotations
 from protocol.dialect import mavlink
 from rig_emulator.config.loader import ConfigError
 from rig_emulator.link.params import Param, ParamTable, as_float32
+from rig_emulator.link.state_dir import StateWriteError
 
 
 class ParamService:
-    def __init__(self, rig, out, table: ParamTable | None = None):
+    def __init__(self, rig, out, table: ParamTable | None = None, store=None):
         self.rig = rig
         self.out = out  # reply(channel, msg), broadcast(msg), statustext(channel, severity, text)
         self.table = table or ParamTable()
+        self.store = store  # save(name, value) before the echo, or None
         self.rejected = 0
 
     def value_message(self, p: Param):
@@ -45,8 +49,15 @@ class ParamService:
             self.rejected += 1
             self.out.statustext(channel, mavlink.MAV_SEVERITY_WARNING, f"no parameter {msg.param_id!r}")
             return
+        old = self.rig.cfg[p.key]
         try:
             self.rig.set_param(p.key, p.to_config(float(msg.param_value), self.rig.cfg))
+            if self.store is not None:
+                try:
+                    self.store.save(p.name, float(msg.param_value))
+                except StateWriteError:
+                    self.rig.set_param(p.key, old)
+                    raise
         except (ConfigError, ValueError) as exc:
             self.rejected += 1
             self.out.reply(channel, self.value_message(p))

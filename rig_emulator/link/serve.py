@@ -6,6 +6,15 @@ up with no configuration) and ``tcpin:127.0.0.1:5760`` (scripts, MAVProxy). Repe
 faster, ``0`` or ``max`` runs as fast as possible. SIGINT/SIGTERM stop the rig cleanly
 (exit 0). On start one line per endpoint is printed, ``rig-emulator: serving URL`` with
 the bound port, so scripts can bind port 0 and read the port back.
+
+Parameters set over MAVLink and the mission are kept in ``./rig-state`` (``--state-dir``,
+``--wipe``, ``--no-persist``; :mod:`rig_emulator.link.state_dir`); ``--signing-key`` turns
+MAVLink 2 signing on (:mod:`rig_emulator.link.signing`).
+
+``--start-paused`` holds the simulated clock at 0 until a mission is started (MISSION_START
+or AUTO.MISSION): a script uploads, arms and starts at its own pace and the flight, stamped
+in simulated time from the start, is the same run after run (``rig-gcs reproduce`` flies
+the Fig. 19 rectangle this way).
 """
 
 from __future__ import annotations
@@ -14,7 +23,9 @@ import signal
 
 from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.link.endpoints import EndpointError
+from rig_emulator.link.loop_timing import LoopTiming
 from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
+from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args
 from rig_emulator.link.server import RigServer
 from rig_emulator.simulation.live import LiveRig
 
@@ -46,20 +57,49 @@ def cmd_serve(args, overrides: dict) -> int:
         raise ConfigError(f"--duration {args.duration}: must be > 0")
     if not 0.1 <= args.chunk_ms <= 100.0:
         raise ConfigError(f"--chunk-ms {args.chunk_ms}: must be in [0.1, 100]")
+    key, key_source = signing_key_from_args(args, _log)
+    state = open_state(args, args.home)
+    try:
+        return _serve(args, overrides, state, make_signing(key, key_source, state, _log))
+    finally:
+        if state is not None:
+            state.close()
+
+
+def _log(text: str) -> None:
+    print(f"rig-emulator: {text}", flush=True)
+
+
+def _serve(args, overrides: dict, state, signing) -> int:
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
     rig = prepare_rig(cfg)
     try:
         server = RigServer(rig, args.mavlink or list(DEFAULT_ENDPOINTS), sysid=args.sysid, home=args.home,
-                           speedup=args.speedup, chunk_s=chunk_seconds(args.chunk_ms, args.speedup))
+                           speedup=args.speedup, chunk_s=chunk_seconds(args.chunk_ms, args.speedup),
+                           signing=signing, state=state)
     except EndpointError as exc:
         raise ConfigError(str(exc)) from exc
+    if state is not None:
+        try:
+            _log(state.restore(server))
+        except ConfigError:
+            server.close()
+            raise
+    server.hold_clock = bool(getattr(args, "start_paused", False))
+    if args.timing_log:
+        server.timing = LoopTiming(server.chunk_s, args.speedup)
     previous = {s: signal.signal(s, lambda *_: server.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         for url in server.urls:
             print(f"rig-emulator: serving {url}", flush=True)
         server.run(args.duration)
     finally:
+        if server.timing is not None:
+            server.timing.reanchors = server.overruns
+            server.timing.write(args.timing_log)
         server.close()
+        if signing is not None:
+            signing.close()
         for s, handler in previous.items():
             signal.signal(s, handler)
     c = server.counters

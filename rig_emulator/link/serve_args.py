@@ -42,3 +42,20 @@ def add_serve_args(p: argparse.ArgumentParser) -> None:
                    help="simulated seconds per wall second; 0 or 'max' = as fast as possible (default 1)")
     p.add_argument("--duration", type=float, help="stop after this many simulated seconds (default: run until a signal)")
     p.add_argument("--chunk-ms", type=float, default=5.0, help="simulated time per physics chunk at real time; faster runs use up to 4x this (default %(default)s)")
+    p.add_argument("--start-paused", action="store_true",
+                   help="hold the simulated clock at its start until a mission is started (MAV_CMD_MISSION_START or "
+                        "AUTO.MISSION); commands are served meanwhile, so a scripted run (upload, arm, start) gives "
+                        "the same flight whenever its commands arrive")
+    p.add_argument("--timing-log", metavar="FILE.npz",
+                   help="record each physics chunk's wall-clock times and write them to FILE at exit (jitter benchmark)")
+    g = p.add_argument_group("state kept across restarts (parameters set over MAVLink, the mission, the signing clock)")
+    g.add_argument("--state-dir", metavar="DIR", help="where (default ./rig-state, created if needed; one rig per directory)")
+    g.add_argument("--wipe", action="store_true", help="discard the stored state and start from the configuration")
+    g.add_argument("--no-persist", action="store_true", help="keep nothing: read and write no state directory")
+    g = p.add_argument_group("MAVLink 2 signing (off unless a key is given)")
+    g.add_argument("--signing-key", metavar="KEY",
+                   help="PASSPHRASE (key = its SHA-256, as MAVProxy's `signing setup PASSPHRASE` and QGroundControl "
+                        "derive it) or hex:<64 hex digits>; then all the rig sends is signed and all it receives must "
+                        "be signed with the key (RADIO_STATUS excepted), else it is dropped and counted. "
+                        "Other users can see command lines: prefer --signing-key-file")
+    g.add_argument("--signing-key-file", metavar="PATH", help="a file whose first line is the KEY of --signing-key")

@@ -11,6 +11,10 @@ the host cannot keep up the pacing re-anchors instead of bursting (counted in
 
 Bad input never stops the loop: unparsable bytes, bad CRCs, messages for other systems and
 unusable fields are counted in :attr:`RigServer.counters` and dropped.
+
+Optional: ``signing`` (:class:`~rig_emulator.link.signing.LinkSigning`) signs every link and
+rejects what is not signed with its key; ``state`` (:class:`~rig_emulator.link.rig_state.RigState`)
+stores accepted parameter changes and missions before they are acknowledged.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from protocol.dialect import mavlink as M
 from protocol.geodesy import Home
 from rig_emulator.link import offboard, telemetry_status
 from rig_emulator.link.channel import Channel
+from rig_emulator.link.command_dedup import CommandDedup
 from rig_emulator.link.commands import Command, execute
 from rig_emulator.link.counters import LinkCounters
 from rig_emulator.link.endpoints import open_endpoint
@@ -32,6 +37,7 @@ from rig_emulator.link.mission_exec import MissionExecutor
 from rig_emulator.link.mission_transfer import MissionTransfer
 from rig_emulator.link.modes import FlightModes
 from rig_emulator.link.param_service import ParamService
+from rig_emulator.link.signing import refuse_setup_signing
 from rig_emulator.link.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
 from rig_emulator.link.streams import StreamSchedule
 from rig_emulator.link.telemetry_context import TelemetryContext
@@ -39,12 +45,13 @@ from rig_emulator.link.telemetry_context import TelemetryContext
 COMPID = M.MAV_COMP_ID_AUTOPILOT1
 HEARTBEAT_PERIOD_S = 1.0
 MAX_LAG_S = 0.25  # further behind real time than this: re-anchor the pacing
+CATCH_UP_CHUNKS = 10  # at most this many chunks due at once are run before the link is serviced again
 STATUSTEXT_LEN = 50
 
 
 class RigServer:
     def __init__(self, rig, endpoints: list[str], sysid: int = 1, home: Home | None = None,
-                 speedup: float = 1.0, chunk_s: float = 0.005):
+                 speedup: float = 1.0, chunk_s: float = 0.005, signing=None, state=None):
         if not 1 <= sysid <= 255:
             raise ValueError(f"sysid {sysid}: must be 1..255")
         if not (speedup >= 0.0 and math.isfinite(speedup)):
@@ -58,8 +65,11 @@ class RigServer:
         self.modes = FlightModes()
         self.ctx = TelemetryContext(rig=rig, home=home or Home(35.7, 51.4, 1200.0), sensors=load_sensor_model(),
                                     modes=self.modes, counters=self.counters, sysid=sysid)
-        self.params = ParamService(rig, self)
-        self.mission = MissionExecutor(self)
+        self.signing = signing
+        if signing is not None:
+            signing.bind(self)
+        self.params = ParamService(rig, self, store=state.params if state is not None else None)
+        self.mission = MissionExecutor(self, store=state.mission if state is not None else None)
         self.ctx.mission = self.mission
         self.mission_transfer = MissionTransfer(self, self.mission)
         self.endpoints = []
@@ -71,6 +81,12 @@ class RigServer:
             raise
         self.channels: dict[tuple, Channel] = {}
         self.overruns = 0
+        #: --start-paused: the simulated clock holds until a mission is started (MISSION_START or
+        #: AUTO.MISSION), so a scripted flight does not depend on when its set-up commands arrived
+        self.hold_clock = False
+        self.timing = None  # a rig_emulator.link.loop_timing.LoopTiming records every chunk's wall times
+        self.command_dedup = CommandDedup()
+        self.last_calibration = -math.inf  # wall-clock time of the last PREFLIGHT_CALIBRATION run
         self.heartbeat_pending = False
         self._stop = False
         self._snap = None
@@ -88,6 +104,7 @@ class RigServer:
             "SET_ATTITUDE_TARGET": lambda msg, ch: self._setpoint(offboard.apply_attitude_target, msg),
             "TIMESYNC": self._timesync,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
+            "SETUP_SIGNING": lambda msg, ch: refuse_setup_signing(self, msg, ch),
             **self.mission_transfer.handlers(),
         }
 
@@ -145,7 +162,7 @@ class RigServer:
                 ck = (id(ep), key)
                 if event == "open":
                     sched = StreamSchedule(default_rates(), self.chunk_s)
-                    self.channels[ck] = Channel(ep, key, self.sysid, COMPID, self.counters, sched)
+                    self.channels[ck] = Channel(ep, key, self.sysid, COMPID, self.counters, sched, self.signing)
                     self.channels[ck].send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
                 elif event == "closed":
                     self.channels.pop(ck, None)
@@ -184,6 +201,8 @@ class RigServer:
     def _command(self, cmd: Command, channel: Channel) -> None:
         self.counters.commands += 1
         result, follow = execute(cmd, self, channel)
+        if result is None:  # a duplicated or overtaken copy of a command already answered
+            return
         channel.send(M.MAVLink_command_ack_message(
             command=cmd.command, result=result, progress=0, result_param2=0,
             target_system=0, target_component=0))
@@ -218,6 +237,7 @@ class RigServer:
     # --- the loop ------------------------------------------------------------------------------------
     def step_chunk(self) -> None:
         self.rig.step(self.chunk_steps)
+        self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
 
@@ -260,6 +280,15 @@ class RigServer:
             self._heartbeat_if_due(t0)
             self.service_io()
             self.mission_transfer.tick(t0)
+            if self.signing is not None:
+                self.signing.tick(t0)
+            if self.hold_clock:
+                if self.mission.state != M.MISSION_STATE_ACTIVE:
+                    busy += time.monotonic() - t0
+                    self._wait_io(min(0.02, max(self._next_heartbeat - t0, 0.0)))
+                    continue
+                self.hold_clock = False
+                wall0, sim0 = time.monotonic(), self.rig.time_s
             if self.speedup > 0.0:
                 lag = sim0 + (t0 - wall0) * self.speedup - self.rig.time_s
                 if lag < self.chunk_s:
@@ -270,12 +299,23 @@ class RigServer:
                 if lag > MAX_LAG_S * max(self.speedup, 1.0):
                     wall0, sim0 = t0, self.rig.time_s
                     self.overruns += 1
-            self.step_chunk()
+                    self.counters.pacing_reset(lag)
+                    lag = self.chunk_s
+            # Behind schedule (a flood of input, a slow request): run the chunks that are due before the
+            # link gets its next turn, so control keeps its rate and telemetry thins instead.
+            for _ in range(1 if self.speedup <= 0.0 else max(1, min(int(lag / self.chunk_s), CATCH_UP_CHUNKS))):
+                if self.rig.time_s >= t_end:
+                    break
+                if self.timing is not None:
+                    self.timing.begin(wall0, sim0, self.rig.time_s)
+                self.step_chunk()
             self.emit_streams()
             for ep in self.endpoints:
                 ep.flush()
             t1 = time.monotonic()
             busy += t1 - t0
+            if self.timing is not None:
+                self.timing.finish(t1, self.counters.sent)
             if t1 - window_start >= 1.0:
                 self.ctx.load_fraction = min(busy / (t1 - window_start), 1.0)
                 busy, window_start = 0.0, t1

@@ -16,6 +16,7 @@ from rig_emulator.link import telemetry_attitude as A
 from rig_emulator.link import telemetry_position as P
 from rig_emulator.link import telemetry_sensors as S
 from rig_emulator.link import telemetry_status as T
+from rig_emulator.link.link_status import link_status
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,7 @@ STREAMS: dict[int, Stream] = {s.msg_id: s for s in (
 ON_REQUEST: dict[int, Callable] = {
     M.MAVLINK_MSG_ID_HEARTBEAT: T.heartbeat,
     M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: T.autopilot_version,
+    M.MAVLINK_MSG_ID_NAMED_VALUE_INT: link_status,  # the link and loop counters (rig_emulator.link.link_status)
     **{msg_id: s.build for msg_id, s in STREAMS.items()},
 }
 

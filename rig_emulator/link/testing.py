@@ -22,17 +22,25 @@ Client helpers: ``recv`` (next matching message), ``command`` (COMMAND_LONG -> i
 ``stamp_s`` (count messages against their own simulated-time stamps).
 
 ``connect`` opens a pymavlink ``mavutil`` connection speaking the hilms dialect over
-MAVLink 2 (client sysid 255 by default). ``udp_listener`` opens a UDP socket for a rig
-``udpout`` endpoint *before* the rig starts (pass ``extra_endpoints=[listener_url]``).
+MAVLink 2 (client sysid 255 by default; ``signing_key=`` signs it with pymavlink's
+``setup_signing``). ``udp_listener`` opens a UDP socket for a rig ``udpout`` endpoint
+*before* the rig starts (pass ``extra_endpoints=[listener_url]``).
+
+State: every :class:`RigProcess` gets a state directory of its own (a fresh temporary one,
+removed at :meth:`~RigProcess.stop`, unless ``state_dir=`` names one or ``args`` has
+``--state-dir`` / ``--no-persist``), so rigs never share stored parameters or missions.
+:class:`RigThread` stores nothing unless given ``state_dir=``.
 """
 
 from __future__ import annotations
 
 import os
 import queue
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections import defaultdict
@@ -55,13 +63,19 @@ def client_url(rig_url: str) -> str:
     raise ValueError(f"{rig_url!r}: no client form for this endpoint kind")
 
 
-def connect(rig_url: str, source_system: int = 255, source_component: int = 190):
-    """A pymavlink connection (hilms dialect, MAVLink 2) to a rig endpoint URL."""
+def connect(rig_url: str, source_system: int = 255, source_component: int = 190, signing_key: bytes | None = None,
+            **signing):
+    """A pymavlink connection (hilms dialect, MAVLink 2) to a rig endpoint URL; with
+    ``signing_key`` it signs what it sends and checks what it receives (``signing`` are
+    further ``setup_signing`` arguments: ``link_id``, ``initial_timestamp``, ...)."""
     use_hilms_dialect()
     from pymavlink import mavutil
 
-    return mavutil.mavlink_connection(client_url(rig_url), source_system=source_system,
+    conn = mavutil.mavlink_connection(client_url(rig_url), source_system=source_system,
                                       source_component=source_component, autoreconnect=False)
+    if signing_key is not None:
+        conn.setup_signing(signing_key, sign_outgoing=True, **signing)
+    return conn
 
 
 def udp_listener(source_system: int = 255):
@@ -155,12 +169,18 @@ class _RigBase:
 class RigProcess(_RigBase):
     """``rig-emulator serve`` as a subprocess with a tcpin endpoint on a free port."""
 
-    def __init__(self, speedup: float | str = 1.0, extra_endpoints=(), args=(), tcp: bool = True):
+    def __init__(self, speedup: float | str = 1.0, extra_endpoints=(), args=(), tcp: bool = True, state_dir=None):
         endpoints = (["tcpin:127.0.0.1:0"] if tcp else []) + list(extra_endpoints)
         cmd = [sys.executable, "-m", "rig_emulator", "serve", "--speedup", str(speedup)]
         for ep in endpoints:
             cmd += ["--mavlink", ep]
         cmd += list(args)
+        self._own_state_dir = None
+        if state_dir is not None:
+            cmd += ["--state-dir", str(state_dir)]
+        elif not any(a in ("--state-dir", "--no-persist") or str(a).startswith("--state-dir=") for a in args):
+            self._own_state_dir = tempfile.mkdtemp(prefix="hilms-rig-state-")
+            cmd += ["--state-dir", self._own_state_dir]
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
         self._lines: queue.Queue = queue.Queue()
@@ -173,8 +193,10 @@ class RigProcess(_RigBase):
                 line = self._lines.get(timeout=max(deadline - time.monotonic(), 0.01))
             except queue.Empty:
                 self.proc.kill()
+                self._remove_own_state_dir()
                 raise RuntimeError(f"rig did not start: {self.proc.stderr.read()}") from None
             if line is None:
+                self._remove_own_state_dir()
                 raise RuntimeError(f"rig exited with {self.proc.wait()}: {self.proc.stderr.read()}")
             if line.startswith("rig-emulator: serving "):
                 self.urls.append(line.split()[-1])
@@ -194,20 +216,37 @@ class RigProcess(_RigBase):
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        self._remove_own_state_dir()
         return self.proc.returncode
+
+    def _remove_own_state_dir(self) -> None:
+        if self._own_state_dir is not None:
+            shutil.rmtree(self._own_state_dir, ignore_errors=True)
+            self._own_state_dir = None
 
 
 class RigThread(_RigBase):
     """A :class:`RigServer` running in a daemon thread of this process."""
 
-    def __init__(self, speedup: float = 1.0, extra_endpoints=(), overrides=None, scenario=None, sysid: int = 1):
+    def __init__(self, speedup: float = 1.0, extra_endpoints=(), overrides=None, scenario=None, sysid: int = 1,
+                 signing_key: bytes | None = None, state_dir=None):
         from rig_emulator.config.loader import load_config
+        from rig_emulator.link.rig_state import RigState
         from rig_emulator.link.serve import prepare_rig
         from rig_emulator.link.server import RigServer
+        from rig_emulator.link.signing import LinkSigning
 
         cfg = load_config(scenario=scenario, overrides=overrides or {})
-        self.server = RigServer(prepare_rig(cfg), ["tcpin:127.0.0.1:0", *extra_endpoints], sysid=sysid,
-                                speedup=speedup)
+        rig = prepare_rig(cfg)
+        self.state = None if state_dir is None else RigState(state_dir, None)
+        signing = None
+        if signing_key is not None:
+            signing = LinkSigning(signing_key, stored=self.state and self.state.signing_stored,
+                                  save=self.state and self.state.save_signing)
+        self.server = RigServer(rig, ["tcpin:127.0.0.1:0", *extra_endpoints], sysid=sysid, speedup=speedup,
+                                signing=signing, state=self.state)
+        if self.state is not None:
+            self.state.restore(self.server)
         self.urls = self.server.urls
         self.error: BaseException | None = None
         self._thread = threading.Thread(target=self._run, daemon=True)
@@ -223,6 +262,10 @@ class RigThread(_RigBase):
         self.server.stop()
         self._thread.join(30.0)
         self.server.close()
+        if self.server.signing is not None:
+            self.server.signing.close()
+        if self.state is not None:
+            self.state.close()
         if self.error is not None:
             raise self.error
 

@@ -268,6 +268,32 @@ def test_run_suite_end_to_end(tmp_path):
     assert json.loads(out.read_text())["benchmarks"]["speed"]["metrics"][0]["value"] == 800.0
 
 
+def test_cache_groups_share_a_numba_cache_and_summary_bugs_are_reported():
+    r = Registry()
+    r.add_probe("a", echo_probe, {"value": 1.0}, cache="g")
+    r.add_probe("b", echo_probe, {"value": 2.0}, cache="g")
+    r.add_probe("c", echo_probe, {"value": 3.0})
+    r.add_benchmark("ok", ["a", "b", "c"], lambda s: [Metric("m", 1.0, "x")])
+    r.add_benchmark("buggy", ["a"], lambda s: [1 / 0])
+    doc = run_suite(r, repeat=1, log=open(os.devnull, "w"))
+    cache = {n: doc["probes"][n]["runs"][0]["cache"] for n in "abc"}
+    assert cache["a"] == cache["b"] != cache["c"]
+    assert doc["probes"]["a"]["numba_cache"] == "shared by group 'g'" and doc["probes"]["c"]["numba_cache"] == "own"
+    assert doc["benchmarks"]["ok"]["status"] == "ok"
+    assert doc["benchmarks"]["buggy"]["status"] == "error" and "ZeroDivisionError" in doc["benchmarks"]["buggy"]["error"]
+
+
+def test_paired_difference_metric():
+    from benchmarks.harness import paired_difference_metric
+
+    a = ProbeStats("a", [{"x": 3.0}, {"x": 5.0}, {"x": 4.0}])
+    b = ProbeStats("b", [{"x": 1.0}, {"x": 1.0}, {"x": 3.0}])
+    m = paired_difference_metric(a, "x", b, "x", "excess", "ms")
+    assert (m.value, m.low, m.high, m.reference) == (2.0, 1.0, 4.0, "b")
+    with pytest.raises(BenchmarkError, match="cannot pair"):
+        paired_difference_metric(a, "x", ProbeStats("e", [{"x": 1.0}]), "x", "d", "ms")
+
+
 def test_run_suite_rejects_bad_settings():
     r = Registry()
     r.add_probe("p", echo_probe, {"value": 1.0})

@@ -3,6 +3,7 @@
 import json
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -173,3 +174,23 @@ def test_files_by_suffix_and_atomic_save(tmp_path):
         save_mission(bad, tmp_path / "a.plan")
     assert (tmp_path / "a.plan").read_text() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.plan", "a.txt", "a.waypoints"]
+
+
+def test_float32_extremes_survive_a_round_trip():
+    """FLT_MAX is written as its shortest decimal 3.4028235e+38, a little above FLT_MAX as a float64:
+    it must read back (a plain |v| <= FLT_MAX check refused the file rig-gcs had written)."""
+    big = float(np.finfo(np.float32).max)
+    m = Mission((MissionItem(M.MAV_CMD_NAV_WAYPOINT, M.MAV_FRAME_LOCAL_NED, (big, -big, 0.0, math.nan), 1.0, 2.0, -big),),
+                (35.7, 51.4, 1200.0))
+    for write, parse in ((write_wpl, parse_wpl), (write_plan, parse_plan)):
+        assert parse(write(m)).same_as(m.canonical())
+    with pytest.raises(MissionFileError, match="param1 = 3.5e\\+38 does not fit a float32"):
+        parse_wpl(write_wpl(m).replace("3.4028235e+38", "3.5e+38", 1))
+
+
+def test_a_fence_that_is_not_a_list_is_an_error_not_a_crash():
+    """Found by tests/gcs_tools/test_files_fuzz.py: "circles": 1 raised a TypeError (len of an int)."""
+    doc = json.loads(write_plan(Mission((), (35.7, 51.4, 1200.0))))
+    doc["geoFence"]["circles"] = 1
+    with pytest.raises(MissionFileError, match="geoFence.circles: expected a list, got 1"):
+        parse_plan(json.dumps(doc), "f.plan")

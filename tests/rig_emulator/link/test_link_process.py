@@ -23,7 +23,7 @@ def test_default_command_serves_and_duration_stops_it():
     udp_client, udp_url = udp_listener()
     proc = subprocess.run(
         [sys.executable, "-m", "rig_emulator", "--mavlink", udp_url, "--speedup", "max", "--duration", "3",
-         "--sysid", "7", "--set", "control.strategy=pid"],
+         "--sysid", "7", "--set", "control.strategy=pid", "--no-persist"],
         capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert f"serving {udp_url}" in proc.stdout
@@ -36,7 +36,7 @@ def test_default_command_serves_and_duration_stops_it():
 
 def test_bad_options_exit_two():
     for args in (["--mavlink", "serial:/dev/null"], ["--speedup", "-1"], ["--sysid", "0"], ["--set", "smc.k=5"]):
-        proc = subprocess.run([sys.executable, "-m", "rig_emulator", "serve", *args, "--duration", "1"],
+        proc = subprocess.run([sys.executable, "-m", "rig_emulator", "serve", *args, "--duration", "1", "--no-persist"],
                               capture_output=True, text=True, timeout=120)
         assert proc.returncode == 2, (args, proc.stdout, proc.stderr)
         assert "error" in proc.stderr

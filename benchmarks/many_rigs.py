@@ -1,0 +1,344 @@
+"""many-rigs: sweeps of N = 10, 100, 1000 independent rigs over all cores (issue 8 item 2).
+
+The rigs. Every rig is the full-fidelity rig of ``rig-core`` (1 kHz physics, five IMU
+modules, four load cells, estimators, smc-flc) flying the harmonic attitude reference of
+Eq. 44 (Fig. 13) for ``duration`` simulated seconds (5 s; quick: 1 s), each with its own
+frequency ``guidance.omega`` spread over 0.2 .. 2.0 rad/s. They are one physical rig
+(``sim.seed = 0``) whose IMU calibration (Sec. 4-1) is run once by the probe, before any
+timing, with ``rig-emulator calibrate`` and loaded by every run
+(``sensors.calibration_file``), as the real rig is calibrated once and then flown many
+times. (Rigs of distinct seeds would each run the calibration procedure at start-up;
+``sweep-single`` reports what that costs per rig.) Each run asks for no time series back
+(``SimJob.columns = ()``).
+
+Probes (fresh processes, numba cache warm):
+
+* ``sweep-single`` - ``jobs`` of those runs one after another in one warm process
+  (``run_jobs(workers=1)``): the single-rig real-time factor (simulated s / s in the
+  compiled loop, median over the runs: item 1's figure for this scenario), the serial
+  end-to-end throughput (simulated s per wall s including each run's configuration and
+  set-up), the set-up time per run, and the start-up of one rig that runs the calibration
+  procedure itself.
+* ``sweep-n10``, ``sweep-n100``, ``sweep-n1000`` - :func:`rig_emulator.sweep.run_jobs` over
+  ``os.cpu_count()`` local worker processes (spawned per sweep), wall time around the call
+  (validation, pool start, numba cache load in each worker, runs, results): aggregate
+  rig-seconds per wall second, and CPU seconds of this process and its workers
+  (``getrusage``), which do not depend on what else the machine runs.
+
+Figures. **Parallel efficiency** (the issue's) = aggregate rig-s per wall s / (single-rig
+real-time factor x cores), both from the same repetition; target >= 80 %. It counts wall
+time, so whatever else runs on the machine lowers it. Beside it, for the diagnosis, two
+figures counted in CPU time (``getrusage`` of the caller and its workers, ``process_time``
+in ``sweep-single``), which other load does not change: the **CPU efficiency** = rig-s per
+CPU-s of the sweep / simulated s per CPU-s of a single rig's run (the share of the sweep's
+CPU time that simulates: 1 - what set-up, workers' start and the pool cost), and the same
+against the serial runs with their set-up (what the pool alone costs); and the cores the
+sweep kept busy (CPU s / wall s).
+
+BLAS threads. Both probes run with one BLAS thread per process (``OPENBLAS_NUM_THREADS=1``,
+inherited by the workers): with OpenBLAS's default of one thread per core, a rig's set-up
+(scipy's DARE solve for the load-cell Kalman gain) cost about three times the CPU on this
+machine, and the workers already occupy every core.
+
+Dask. With ``python -m benchmarks --scheduler ADDRESS`` (``tcp://host:8786``, or ``local``
+for a ``distributed.LocalCluster`` with one single-threaded worker process per core started
+by the probe) the N-rig probes also run each sweep on that cluster and report the same
+figures against its total thread count. A remote cluster's workers must have hilms-sil
+installed and see the calibration file at the same path (a shared file system).
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+
+from . import procfs
+from .harness import REGISTRY, BenchmarkError, Metric, ProbeStats, Target, benchmark, median, probe
+
+SINGLE_PROBE = "sweep-single"
+SIZES = (10, 100, 1000)
+QUICK_SIZES = {10: 4, 100: 8, 1000: 16}
+CACHE_GROUP = "served-rig"
+SCENARIO = "harmonic"
+STRATEGY = "smc-flc"
+SEED = 0
+DURATION_S = 5.0
+QUICK_DURATION_S = 1.0
+OMEGA_RANGE = (0.2, 2.0)
+SCHEDULER_ENV = "HILMS_BENCH_SCHEDULER"
+EFFICIENCY_TARGET = Target(">=", 0.8, "issue 8")
+#: One BLAS thread per process: the workers are as many as the cores already, and OpenBLAS's
+#: own threads (one per core, spinning while they wait) tripled the CPU cost of a rig's
+#: set-up (the load-cell Kalman gain's DARE solve) on this 2-core machine.
+SINGLE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+def single_threaded_blas() -> None:
+    """Set :data:`SINGLE_THREAD_ENV` in this process's environment (before numpy is imported
+    here, and for every worker process spawned from now on)."""
+    os.environ.update(SINGLE_THREAD_ENV)
+
+
+def probe_name(n: int) -> str:
+    return f"sweep-n{n}"
+
+
+def _sweep():
+    from .harness import BenchmarkUnavailable
+
+    try:
+        from rig_emulator import sweep
+    except ImportError as exc:
+        raise BenchmarkUnavailable(f"rig_emulator.sweep is not importable: {type(exc).__name__}: {exc}") from None
+    for name in ("SimJob", "run_jobs"):
+        if not hasattr(sweep, name):
+            raise BenchmarkUnavailable(f"rig_emulator.sweep has no {name}: the many-rigs benchmark needs it")
+    return sweep
+
+
+def make_calibration(directory: str) -> str:
+    """Run ``rig-emulator calibrate --seed SEED`` into ``directory``; returns the file's path."""
+    path = os.path.join(directory, f"imu-calibration-seed{SEED}.json")
+    proc = subprocess.run([sys.executable, "-m", "rig_emulator", "calibrate", "--seed", str(SEED), "--out", path],
+                          capture_output=True, text=True, timeout=600)
+    if proc.returncode != 0 or not os.path.exists(path):
+        raise RuntimeError(f"rig-emulator calibrate failed ({proc.returncode}): {proc.stderr.strip()[-500:]}")
+    return path
+
+
+def omegas(n: int) -> list[float]:
+    lo, hi = OMEGA_RANGE
+    return [lo + (hi - lo) * k / max(n - 1, 1) for k in range(n)]
+
+
+def make_jobs(n: int, duration: float, calibration_file: str | None):
+    """``n`` harmonic runs of the seed-0 rig, one ``guidance.omega`` each, no series returned."""
+    sweep = _sweep()
+    base = {"sensors.calibration_file": calibration_file} if calibration_file else {}
+    return [sweep.SimJob(SCENARIO, STRATEGY, seed=SEED, duration=duration, columns=(),
+                         overrides={**base, "guidance.omega": w}, label=f"omega={w:.4f}")
+            for w in omegas(n)]
+
+
+def _cpu_self_children() -> tuple[float, float]:
+    s = resource.getrusage(resource.RUSAGE_SELF)
+    c = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return s.ru_utime + s.ru_stime, c.ru_utime + c.ru_stime
+
+
+def _figures(results, wall: float, cpu: float | None, cores: int, prefix: str) -> dict:
+    sim = sum(r.sim_time_s for r in results)
+    figs = {f"{prefix}rig_s_per_wall_s": sim / wall, f"{prefix}wall_s": wall, f"{prefix}cores": cores,
+            f"{prefix}rig_s": sim}
+    if cpu is not None:
+        figs[f"{prefix}cpu_s"] = cpu
+        figs[f"{prefix}rig_s_per_cpu_s"] = sim / cpu
+        figs[f"{prefix}cores_used"] = cpu / wall
+    return figs
+
+
+@probe(SINGLE_PROBE, params={"jobs": 10, "duration": DURATION_S}, quick={"jobs": 3, "duration": QUICK_DURATION_S},
+       cache=CACHE_GROUP, description=f"{SCENARIO} runs one after another in one warm process (the single-rig figure)")
+def sweep_single_probe(jobs: int, duration: float) -> dict:
+    """Single-rig real-time factor and serial throughput of the sweep's runs; see the module docstring.
+
+    Each run is what ``rig_emulator.sweep.run_job`` does (``Simulation(job.config()).run()``),
+    timed in two parts: set-up (configuration + construction) and the run, in wall and CPU
+    seconds of this process.
+    """
+    import pickle
+
+    single_threaded_blas()
+    sweep = _sweep()
+    from rig_emulator.simulation.run import Simulation
+
+    with tempfile.TemporaryDirectory(prefix="hilms-bench-sweep-") as tmp:
+        t0 = time.perf_counter()
+        cal = make_calibration(tmp)
+        calibrate_s = time.perf_counter() - t0
+        batch = make_jobs(jobs, duration, cal)
+        warm = sweep.run_jobs(batch[:1], workers=1)  # loads (or compiles) the step loop
+        setup_w = setup_c = run_w = run_c = sim = 0.0
+        rtfs = []
+        for job in batch:
+            w0, c0 = time.perf_counter(), time.process_time()
+            rig = Simulation(job.config())
+            w1, c1 = time.perf_counter(), time.process_time()
+            r = rig.run()
+            w2, c2 = time.perf_counter(), time.process_time()
+            setup_w += w1 - w0
+            setup_c += c1 - c0
+            run_w += w2 - w1
+            run_c += c2 - c1
+            sim += r.sim_time_s
+            rtfs.append(r.sim_time_s / r.wall_time_s)
+        # a rig that runs the calibration procedure itself at start-up
+        own = sweep.SimJob(SCENARIO, STRATEGY, seed=SEED, duration=duration, columns=())
+        w0, c0 = time.perf_counter(), time.process_time()
+        Simulation(own.config())
+        own_w, own_c = time.perf_counter() - w0, time.process_time() - c0
+    n = len(batch)
+    return {
+        "rtf": median(rtfs),
+        "rtf_cpu": sim / run_c,
+        "serial_rig_s_per_wall_s": sim / (setup_w + run_w),
+        "serial_rig_s_per_cpu_s": sim / (setup_c + run_c),
+        "setup_s_per_rig": setup_w / n,
+        "setup_cpu_s_per_rig": setup_c / n,
+        "run_cpu_s_per_rig": run_c / n,
+        "setup_s_per_rig_calibrating": own_w,
+        "setup_cpu_s_per_rig_calibrating": own_c,
+        "calibrate_cli_s": calibrate_s,
+        "result_bytes": len(pickle.dumps(warm[0])),
+        "duration_s": duration,
+        "jobs": n,
+    }
+
+
+def _local_cluster(cores: int):
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=cores, threads_per_worker=1, processes=True, dashboard_address=None)
+    return cluster, Client(cluster)
+
+
+def _dask_sweep(batch, address: str, cores_local: int) -> dict:
+    sweep = _sweep()
+    try:
+        from distributed import Client
+    except ImportError:
+        raise RuntimeError(f"{SCHEDULER_ENV}={address!r} needs dask.distributed (pip install 'hilms-sil[cluster]')") \
+            from None
+    cluster = None
+    t_setup = time.perf_counter()
+    if address == "local":
+        cluster, client = _local_cluster(cores_local)
+    else:
+        client = Client(address, timeout="30s")
+    try:
+        setup_s = time.perf_counter() - t_setup
+        threads = sum(client.nthreads().values())
+        t0 = time.perf_counter()
+        results = sweep.run_jobs(batch, scheduler=client)
+        wall = time.perf_counter() - t0
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    figs = _figures(results, wall, None, threads, "dask_")
+    figs["dask_cluster_setup_s"] = setup_s
+    return figs
+
+
+def sweep_probe(n: int, duration: float) -> dict:
+    """``n`` runs over all local cores with ``rig_emulator.sweep.run_jobs`` (and a Dask cluster if given)."""
+    single_threaded_blas()
+    sweep = _sweep()
+    cores = os.cpu_count() or 1
+    with tempfile.TemporaryDirectory(prefix="hilms-bench-sweep-") as tmp:
+        cal = make_calibration(tmp)
+        batch = make_jobs(n, duration, cal)
+        load = procfs.MachineLoad().start()
+        cpu_s0, cpu_c0 = _cpu_self_children()
+        t0 = time.perf_counter()
+        results = sweep.run_jobs(batch, workers=cores)
+        wall = time.perf_counter() - t0
+        cpu_s1, cpu_c1 = _cpu_self_children()
+        load.stop()
+        if len(results) != n or any(r.sim_time_s <= 0 for r in results):
+            raise RuntimeError(f"the sweep returned {len(results)} results for {n} jobs")
+        figs = _figures(results, wall, (cpu_s1 - cpu_s0) + (cpu_c1 - cpu_c0), cores, "")
+        figs["parent_cpu_s"] = cpu_s1 - cpu_s0
+        figs["n"] = n
+        figs["duration_s"] = duration
+        figs.update(load.figures())
+        address = os.environ.get(SCHEDULER_ENV)
+        if address:
+            figs.update(_dask_sweep(batch, address, cores))
+            figs["dask_scheduler"] = address
+    return figs
+
+
+for _n in SIZES:
+    REGISTRY.add_probe(probe_name(_n), sweep_probe, params={"n": _n, "duration": DURATION_S},
+                        quick={"n": QUICK_SIZES[_n], "duration": QUICK_DURATION_S}, cache=CACHE_GROUP,
+                        description=f"{_n} {SCENARIO} runs over all cores (rig_emulator.sweep.run_jobs)")
+
+
+def _per_rep(num: ProbeStats, key: str, single: ProbeStats, ref_key: str, scale_key: str | None) -> list[float]:
+    a, b = num.values(key), single.values(ref_key)
+    if len(a) != len(b) or not a:
+        raise BenchmarkError(f"cannot pair {num.name!r} ({len(a)} runs) with {single.name!r} ({len(b)} runs)")
+    scale = num.values(scale_key) if scale_key else [1.0] * len(a)
+    return [x / (y * c) for x, y, c in zip(a, b, scale)]
+
+
+def _overhead_per_worker(s: ProbeStats, single: ProbeStats) -> list[float]:
+    cpu, parent, n, cores = (s.values(k) for k in ("cpu_s", "parent_cpu_s", "n", "cores"))
+    per_rig = [a + b for a, b in zip(single.values("setup_cpu_s_per_rig"), single.values("run_cpu_s_per_rig"))]
+    if len(per_rig) != len(cpu):
+        raise BenchmarkError(f"cannot pair {s.name!r} ({len(cpu)} runs) with {single.name!r} ({len(per_rig)} runs)")
+    return [(c - p - k * r) / w for c, p, k, r, w in zip(cpu, parent, n, per_rig, cores)]
+
+
+def _ratio(name: str, values: list[float], reference: str, unit: str = "x", targets=(), note: str = "") -> Metric:
+    return Metric(name, median(values), unit, reference, tuple(targets), min(values), max(values), note)
+
+
+@benchmark("many-rigs", probes=(SINGLE_PROBE,) + tuple(probe_name(n) for n in SIZES),
+           description="sweeps of 10, 100, 1000 rigs over all cores (and a Dask cluster if given): "
+                       "rig-s per wall s vs the single-rig figure x cores")
+def many_rigs(stats: dict[str, ProbeStats]) -> list[Metric]:
+    single = stats[SINGLE_PROBE]
+    out = [
+        single.metric("rtf", "single rig: real-time factor (compiled loop, wall)", "x real time",
+                      note=f"{SCENARIO} {single.runs[0].get('duration_s', DURATION_S):g} s, full fidelity, runs one "
+                           "after another in a warm process; the reference of the parallel efficiency"),
+        single.metric("rtf_cpu", "single rig: simulated s per CPU s of the run", "x real time",
+                      note="the same runs counted in CPU time: the reference of the CPU efficiency"),
+        single.metric("serial_rig_s_per_wall_s", "single rig: serial end-to-end rig-s per wall s", "rig-s/s",
+                      note="configuration and construction of each run included"),
+        single.metric("setup_cpu_s_per_rig", "set-up CPU per run (configuration, construction)", "s"),
+        single.metric("run_cpu_s_per_rig", "run CPU per run (the simulated seconds)", "s"),
+        single.metric("setup_cpu_s_per_rig_calibrating", "set-up CPU per run that runs the IMU calibration", "s",
+                      note="what each rig of a distinct seed pays at start-up (the benchmark's rigs load one "
+                           "stored calibration)"),
+    ]
+    dask = all("dask_rig_s_per_wall_s" in r for n in SIZES for r in stats[probe_name(n)].runs)
+    for n in SIZES:
+        s = stats[probe_name(n)]
+        label = f"N={s.runs[0].get('n', n)}"
+        out += [
+            s.metric("rig_s_per_wall_s", f"{label}: aggregate rig-s per wall s", "rig-s/s"),
+            _ratio(f"{label}: parallel efficiency", _per_rep(s, "rig_s_per_wall_s", single, "rtf", "cores"),
+                   SINGLE_PROBE, targets=(EFFICIENCY_TARGET,),
+                   note="aggregate rig-s per wall s / (single-rig real-time factor x cores), paired by repetition"),
+            _ratio(f"{label}: CPU efficiency", _per_rep(s, "rig_s_per_cpu_s", single, "rtf_cpu", None), SINGLE_PROBE,
+                   note="rig-s per CPU-s of the sweep (caller + workers) / single rig's per CPU-s of its run: the "
+                        "share of the sweep's CPU time that simulates; independent of other load"),
+            _ratio(f"{label}: CPU efficiency vs serial end to end",
+                   _per_rep(s, "rig_s_per_cpu_s", single, "serial_rig_s_per_cpu_s", None), SINGLE_PROBE,
+                   note="the same against the serial runs with their set-up: what the pool itself costs"),
+            _ratio(f"{label}: CPU beyond the runs, per worker", _overhead_per_worker(s, single), SINGLE_PROBE, "s",
+                   note="(sweep CPU - caller CPU - N x the single rig's set-up + run CPU) / workers: each worker's "
+                        "start (interpreter, imports, numba cache load) and the pool's traffic"),
+            s.metric("cores_used", f"{label}: cores the sweep kept busy", "cores",
+                     note="CPU s of caller + workers / wall s: below the core count when other work shares them"),
+            s.metric("wall_s", f"{label}: sweep wall time", "s"),
+            s.metric("parent_cpu_s", f"{label}: CPU time of the calling process", "s",
+                     note="job validation, pool, result collection"),
+            s.metric("machine_busy_cores", f"{label}: machine load during the sweep (all processes)", "cores"),
+        ]
+        if dask:
+            out += [
+                s.metric("dask_rig_s_per_wall_s", f"{label} on Dask: aggregate rig-s per wall s", "rig-s/s",
+                         note=f"scheduler {s.runs[0].get('dask_scheduler')}"),
+                _ratio(f"{label} on Dask: parallel efficiency",
+                       _per_rep(s, "dask_rig_s_per_wall_s", single, "rtf", "dask_cores"), SINGLE_PROBE,
+                       targets=(EFFICIENCY_TARGET,), note="against the cluster's total threads"),
+            ]
+    return out

@@ -1,0 +1,97 @@
+"""``rig-gcs reproduce -o DIR``: the paper's experiments, figures, numbers and verdicts in one command.
+
+Registered in :mod:`gcs_tools.cli` by :func:`add_parser`. Exit codes: 0 report written,
+1 a run failed (a simulation, the rig process, the Dask cluster), 2 bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from gcs_tools.errors import EXIT_OK, UsageError
+from gcs_tools.reproduce.experiments import NAMES
+
+
+def _workers(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be >= 1")
+    return n
+
+
+def _seed(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be >= 0")
+    return n
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "reproduce", help="run the paper's experiments and write a report comparing them with the paper",
+        description="Runs the paper's experiments headless and in parallel (hover with shocks, harmonic tracking, "
+                    "frequency sweep, extra masses, line-then-helix, the 250 s altitude run, and the waypoint "
+                    "rectangle flown over MAVLink), then writes DIR/report.md (our numbers next to the paper's and "
+                    "a verdict on each of its claims), DIR/results.json and PNG figures. The same seed gives the "
+                    "same files byte for byte. See docs/REPRODUCTION.md.")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for report.md, results.json and figures")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of every run: %(default)s")
+    p.add_argument("--workers", type=_workers, help="local processes (default: one per core; 1 = in this process)")
+    p.add_argument("--scheduler", metavar="ADDR", help="run the headless simulations on a Dask cluster, e.g. "
+                                                       "tcp://HOST:8786 (needs pip install 'hilms-sil[cluster]')")
+    p.add_argument("--only", action="append", nargs="+", metavar="NAME",
+                   help=f"run only these experiments (repeatable, or comma-separated): {', '.join(NAMES)}")
+    p.add_argument("--quick", action="store_true", help="shortened runs, fewer frequencies and masses: a smoke test, "
+                                                        "not the reproduction")
+    p.add_argument("--no-progress", action="store_true", help="no progress output on stderr")
+    p.add_argument("--timing", metavar="FILE.json", help="also write the run's wall-clock and CPU time to FILE "
+                                                        "(never into DIR: the report stays bit-identical)")
+    p.set_defaults(func=cmd_reproduce)
+
+
+def _cpu_s() -> float:
+    """CPU seconds of this process and its finished children (this process only where getrusage is missing)."""
+    try:
+        import resource
+    except ImportError:  # Windows
+        return time.process_time()
+    me = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def cmd_reproduce(args) -> int:
+    from gcs_tools.reproduce.runner import reproduce
+    from protocol.atomic_file import atomic_write_text
+
+    only = None
+    if args.only:
+        only = [n.strip() for group in args.only for item in group for n in item.split(",") if n.strip()]
+    if args.workers is not None and args.scheduler:
+        raise UsageError("give --workers (local processes) or --scheduler (a Dask cluster), not both")
+    t0, c0 = time.perf_counter(), _cpu_s()
+    outcome = reproduce(args.output, seed=args.seed, workers=args.workers, scheduler=args.scheduler, only=only,
+                        quick=args.quick, show_progress=not args.no_progress)
+    wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
+    for s in outcome.sections:
+        for v in s.verdicts:
+            print(f"{v.status:>17}: {v.text} ({v.source})")
+    figures = sum(len(s.figures) for s in outcome.sections)
+    print(f"wrote {outcome.files[0]} , results.json and {figures} figures")
+    where = f"Dask cluster {args.scheduler}" if args.scheduler else "local processes"
+    print(f"reproduction: {wall:.1f} s wall, {cpu:.1f} s CPU (this process and its local children), "
+          f"{outcome.jobs} headless runs ({outcome.sim_seconds:.0f} simulated s) on {where}")
+    if args.timing:
+        atomic_write_text(args.timing, json.dumps({"wall_s": wall, "cpu_s": cpu, "headless_runs": outcome.jobs,
+                                                   "simulated_s": outcome.sim_seconds, "seed": args.seed,
+                                                   "quick": args.quick, "scheduler": args.scheduler,
+                                                   "workers": args.workers}, indent=1) + "\n")
+    return EXIT_OK

@@ -1,0 +1,136 @@
+"""Run the reproduction: every experiment's headless jobs in one sweep, the MAVLink flight
+beside it, the stability analysis, then figures and the report.
+
+:func:`reproduce` is what ``rig-gcs reproduce`` calls. The headless jobs of all selected
+experiments go to :func:`rig_emulator.sweep.run_jobs` together (local processes, or a Dask
+cluster with ``scheduler``), so the machine stays busy across experiments. The rectangle's
+rig process (always local: it needs loopback sockets) starts once the first headless job
+has finished, i.e. once the numba cache is known to be warm, so a cold start compiles the
+step loop in the sweep's workers and not a third time in the rig.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+from gcs_tools.errors import OperationError, UsageError
+from gcs_tools.reproduce import report
+from gcs_tools.reproduce.experiment import Context, Section
+from gcs_tools.reproduce.experiments import EXPERIMENTS, NAMES, STABILITY
+from gcs_tools.reproduce.progress import Progress
+from gcs_tools.reproduce.stability_section import stability_section
+
+
+@dataclass
+class Outcome:
+    files: list  # paths written (report.md, results.json, figures)
+    sections: list  # Section per experiment, report order
+    jobs: int  # headless runs
+    sim_seconds: float  # simulated seconds of the headless runs
+
+
+def select(only) -> tuple[list, bool]:
+    """(experiment modules, include the stability section) for ``--only`` names (None: all)."""
+    if not only:
+        return list(EXPERIMENTS), True
+    unknown = [n for n in only if n not in NAMES]
+    if unknown:
+        raise UsageError(f"--only {', '.join(unknown)}: unknown; choose from {', '.join(NAMES)}")
+    return [e for e in EXPERIMENTS if e.NAME in only], STABILITY in only
+
+
+def prepare_out_dir(path) -> Path:
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {out}: exists and is not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"-o {out}: cannot create the directory ({exc})") from None
+    return out
+
+
+class _Live(threading.Thread):
+    """An experiment's ``live(ctx)`` in a thread; ``result`` or ``error`` afterwards."""
+
+    def __init__(self, exp, ctx: Context, progress: Progress):
+        super().__init__(daemon=True, name=f"reproduce-{exp.NAME}")
+        self.exp, self.ctx, self.progress = exp, ctx, progress
+        self.result = None
+        self.error: BaseException | None = None
+
+    def run(self) -> None:
+        try:
+            self.result = self.exp.live(self.ctx)
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            self.error = exc
+        self.progress.update(f"{self.exp.NAME} (MAVLink)")
+
+
+def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=None, only=None, quick: bool = False,
+              show_progress: bool = True, stream=None) -> Outcome:
+    """Run the selected experiments and write ``report.md``, ``results.json`` and the figures into ``out_dir``."""
+    from rig_emulator.config.loader import ConfigError
+    from rig_emulator.sweep import JobFailed, run_jobs
+
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise UsageError(f"--seed {seed!r}: must be an integer >= 0")
+    exps, with_stability = select(only)
+    out = prepare_out_dir(out_dir)
+    ctx = Context(seed=seed, quick=quick, out_dir=out)
+    jobs, spans = [], {}
+    for exp in exps:
+        mine = exp.jobs(ctx)
+        spans[exp.NAME] = (len(jobs), len(jobs) + len(mine))
+        jobs += mine
+    lives = [e for e in exps if hasattr(e, "live")]
+    progress = Progress(len(jobs) + len(lives) + int(with_stability), stream=stream, enabled=show_progress)
+    threads = [_Live(e, ctx, progress) for e in lives]
+    started = threading.Event()
+
+    def start_live():
+        if not started.is_set():
+            started.set()
+            for t in threads:
+                t.start()
+
+    def on_job(done, total, job):
+        progress.update(job.label or job.describe())
+        start_live()
+
+    try:
+        if not jobs:
+            start_live()
+        try:
+            results = run_jobs(jobs, workers=workers, scheduler=scheduler, progress=on_job)
+        except (JobFailed, ConfigError) as exc:
+            raise OperationError(str(exc)) from None
+        except OSError as exc:  # e.g. a Dask scheduler that cannot be reached
+            raise OperationError(f"running the simulations failed: {exc}") from None
+        start_live()
+        stab_md, stab = (None, None)
+        if with_stability:
+            stab_md, stab = stability_section()
+            progress.update(STABILITY)
+    finally:
+        for t in threads:
+            if t.is_alive():
+                t.join()
+        progress.close()
+    for t in threads:
+        if t.error is not None:
+            if isinstance(t.error, (OperationError, UsageError)):
+                raise t.error
+            raise OperationError(f"{t.exp.NAME}: {type(t.error).__name__}: {t.error}") from t.error
+    live = {t.exp.NAME: t.result for t in threads}
+    sections: list[Section] = []
+    for exp in exps:
+        a, b = spans[exp.NAME]
+        sections.append(exp.analyse(ctx, results[a:b], live.get(exp.NAME)))
+    names = None if not only else [e.NAME for e in exps] + ([STABILITY] if with_stability else [])
+    files = report.write(out, sections, stab_md, stab, seed, quick, names)
+    files += [out / name for s in sections for name in s.figures]
+    return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results))
+

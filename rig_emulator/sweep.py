@@ -1,0 +1,278 @@
+"""Many independent headless runs, over local processes or a Dask cluster.
+
+A run is described by a small picklable :class:`SimJob` (scenario preset, strategy, seed,
+duration, parameter overrides, which logged columns to bring back); :func:`run_jobs` runs
+a list of them and returns their results **in job order**::
+
+    from rig_emulator.sweep import SimJob, run_jobs
+
+    jobs = [SimJob("harmonic", "flc", seed=1, duration=20.0, overrides={"guidance.omega": w})
+            for w in (0.1, 0.5, 1.0, 2.0)]
+    results = run_jobs(jobs)                                   # local processes, one per core
+    results = run_jobs(jobs, workers=1)                        # serially, in this process
+    results = run_jobs(jobs, scheduler="tcp://10.0.0.5:8786")  # a Dask cluster
+    results[0].mean_errors()["phi_deg"], results[0].series["euler"]
+
+Where the runs go:
+
+* ``scheduler`` (``"tcp://host:port"`` or a ``distributed.Client``) - one Dask task per job
+  (``pip install 'hilms-sil[cluster]'``; every worker needs hilms-sil installed);
+* else ``workers`` (default ``os.cpu_count()``) local processes of a
+  ``concurrent.futures.ProcessPoolExecutor`` started with ``spawn`` (never ``fork``: the
+  caller may run threads; the workers are this process's children, so their CPU time shows
+  in ``resource.getrusage(RUSAGE_CHILDREN)`` once the sweep returns);
+* ``workers=1`` (or a single job): serially in the calling process, no pool.
+
+What comes back: by default a :class:`JobResult` with the logged series named in
+``SimJob.columns`` (all of them when ``None``, none with ``()``: the benchmark's many-rigs
+runs ask for nothing but the counts). ``reduce=f`` instead returns ``f(job, sim_result)``
+computed where the job ran (``f`` must be picklable: a module-level function), so only
+what it returns crosses the process or network boundary.
+
+Determinism: a job's result depends on the job only (the seed seeds every random stream,
+see docs/CONVENTIONS.md), not on the executor, the worker or the order of completion. Runs
+on one machine (one numba build) are bit-identical serial, in local processes or on a
+local Dask cluster; machines with other CPUs may differ in the last bits (numba compiles
+for the host CPU). :meth:`JobResult.digest` fingerprints a result for such comparisons;
+``wall_time_s`` is the only field that varies and it is left out of the digest.
+
+Errors: every job's configuration is validated before anything runs (a
+:class:`~rig_emulator.config.loader.ConfigError` names the job and the key); a job that
+raises while running stops the sweep with :class:`JobFailed` naming it.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import math
+import multiprocessing
+import os
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from rig_emulator.config.loader import ConfigError, RigConfig, load_config
+from rig_emulator.config.schema import STRATEGIES
+from rig_emulator.simulation.log_layout import NAMES as LOG_NAMES
+
+_SERIES = tuple(LOG_NAMES)  # the logged series a job may ask for
+
+Progress = Callable[[int, int, "SimJob"], None]
+
+
+class JobFailed(RuntimeError):
+    """A job raised while running; ``job`` is the job, the message carries its error."""
+
+    def __init__(self, job: "SimJob", message: str):
+        super().__init__(job, message)  # both in args: the exception pickles across processes
+        self.job = job
+        self.message = message
+
+    def __str__(self) -> str:
+        return f"{self.job.describe()}: {self.message}"
+
+
+@dataclass(frozen=True)
+class SimJob:
+    """One headless run: what :func:`rig_emulator.api.simulate` takes, as picklable data.
+
+    ``overrides`` are dotted parameter keys (``{"guidance.omega": 1.2}``), stored as a tuple
+    of (key, value) pairs sorted by key; ``columns`` names the logged series to return
+    (None: all, ``()``: none); ``label`` is free text for the caller (it does not affect
+    the run).
+    """
+
+    scenario: str
+    strategy: str = "smc-flc"
+    seed: int = 0
+    duration: float | None = None
+    overrides: tuple = ()
+    airframe: str = "hilms"
+    columns: tuple | None = None
+    label: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.scenario, str) or not self.scenario:
+            raise ConfigError(f"SimJob scenario {self.scenario!r}: must be a preset name")
+        if self.strategy not in STRATEGIES:
+            raise ConfigError(f"SimJob strategy {self.strategy!r}: must be one of {', '.join(STRATEGIES)}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ConfigError(f"SimJob seed {self.seed!r}: must be an integer >= 0")
+        if self.duration is not None:
+            if isinstance(self.duration, bool) or not isinstance(self.duration, (int, float)) \
+                    or not (math.isfinite(self.duration) and self.duration > 0):
+                raise ConfigError(f"SimJob duration {self.duration!r}: must be a number of seconds > 0")
+            object.__setattr__(self, "duration", float(self.duration))
+        pairs = self.overrides.items() if isinstance(self.overrides, Mapping) else self.overrides
+        try:
+            pairs = tuple(sorted((str(k), copy.deepcopy(v)) for k, v in pairs))
+        except (TypeError, ValueError):
+            raise ConfigError("SimJob overrides: must be a mapping (or pairs) of dotted key -> value") from None
+        object.__setattr__(self, "overrides", pairs)
+        if self.columns is not None:
+            cols = (self.columns,) if isinstance(self.columns, str) else tuple(self.columns)
+            unknown = [c for c in cols if c not in _SERIES]
+            if unknown:
+                raise ConfigError(f"SimJob columns {unknown}: unknown; choose from {', '.join(_SERIES)}")
+            object.__setattr__(self, "columns", cols)
+
+    def describe(self) -> str:
+        head = self.label or f"{self.scenario}/{self.strategy}"
+        return f"job {head!r} (seed {self.seed})"
+
+    def config(self) -> RigConfig:
+        """The validated configuration this job runs (ConfigError naming the job otherwise)."""
+        flat = {k: copy.deepcopy(v) for k, v in self.overrides}
+        flat["control.strategy"] = self.strategy
+        flat["sim.seed"] = self.seed
+        if self.duration is not None:
+            flat["sim.duration"] = self.duration
+        try:
+            return load_config(airframe=self.airframe, scenario=self.scenario, overrides=flat)
+        except ConfigError as exc:
+            raise ConfigError(f"{self.describe()}: {exc}") from None
+
+
+@dataclass
+class JobResult:
+    """What one job produced: the requested series and the run's counts."""
+
+    job: SimJob
+    series: dict
+    reached_t: np.ndarray
+    steps: int
+    sim_time_s: float
+    wall_time_s: float = field(compare=False)  # the only field that depends on the machine's load
+
+    def mean_errors(self, window: tuple[float, float] | None = None) -> dict[str, float]:
+        """Eq. 45 (needs the series t, euler, euler_des, pos, pos_des)."""
+        from protocol.mean_error import mean_errors
+
+        s = self.series
+        missing = [n for n in ("t", "euler", "euler_des", "pos", "pos_des") if n not in s]
+        if missing:
+            raise KeyError(f"{self.job.describe()}: mean errors need the series {missing}")
+        return mean_errors(s["t"], s["euler"], s["euler_des"], s["pos"], s["pos_des"], window)
+
+    def digest(self) -> str:
+        """SHA-256 of the job and every returned number (not the wall time)."""
+        h = hashlib.sha256(repr(self.job).encode())
+        for name in sorted(self.series):
+            a = np.ascontiguousarray(self.series[name])
+            h.update(name.encode())
+            h.update(str(a.dtype).encode() + str(a.shape).encode())
+            h.update(a.tobytes())
+        h.update(np.ascontiguousarray(self.reached_t).tobytes())
+        h.update(f"{self.steps} {self.sim_time_s!r}".encode())
+        return h.hexdigest()
+
+
+def job_result(job: SimJob, sim) -> JobResult:
+    """The default reduction: the requested columns of a :class:`~rig_emulator.simulation.run.SimResult`."""
+    names = sim.series.keys() if job.columns is None else job.columns
+    series = {n: np.array(sim.series[n], copy=True) for n in names}
+    return JobResult(job=job, series=series, reached_t=sim.reached_t.copy(), steps=sim.steps,
+                     sim_time_s=sim.sim_time_s, wall_time_s=sim.wall_time_s)
+
+
+def run_job(job: SimJob, reduce: Callable | None = None):
+    """Run one job here and now (what every worker calls)."""
+    from rig_emulator.simulation.run import Simulation
+
+    cfg = job.config()
+    try:
+        sim = Simulation(cfg).run()
+    except ConfigError as exc:  # found only when the rig is built (e.g. a missing calibration file)
+        raise ConfigError(f"{job.describe()}: {exc}") from None
+    except Exception as exc:  # noqa: BLE001 - re-raised with the job named
+        raise JobFailed(job, f"{type(exc).__name__}: {exc}") from exc
+    return (reduce or job_result)(job, sim)
+
+
+def _mp_context():
+    # spawn, not fork (the caller may run threads) nor forkserver (its workers would not be this
+    # process's children, and their CPU time would be missing from getrusage(RUSAGE_CHILDREN))
+    return multiprocessing.get_context("spawn")
+
+
+def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: Any = None,
+             progress: Progress | None = None, reduce: Callable | None = None) -> list:
+    """Run ``jobs`` and return their results in job order (see the module docstring).
+
+    ``progress(done, total, job)`` is called in the calling process after each job finishes
+    (in completion order). ``workers`` caps the local processes (default ``os.cpu_count()``);
+    ``scheduler`` sends the jobs to a Dask cluster instead.
+    """
+    jobs = list(jobs)
+    for job in jobs:
+        if not isinstance(job, SimJob):
+            raise TypeError(f"run_jobs takes SimJob items, got {type(job).__name__}")
+        job.config()  # bad input fails here, before anything runs
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ValueError(f"workers {workers!r}: must be an integer >= 1")
+    if not jobs:
+        return []
+    if scheduler is not None:
+        return _run_dask(jobs, scheduler, progress, reduce)
+    n = min(workers or os.cpu_count() or 1, len(jobs))
+    if n == 1:
+        out = []
+        for k, job in enumerate(jobs):
+            out.append(run_job(job, reduce))
+            if progress is not None:
+                progress(k + 1, len(jobs), job)
+        return out
+    return _run_pool(jobs, n, progress, reduce)
+
+
+def _run_pool(jobs, n, progress, reduce) -> list:
+    results: list = [None] * len(jobs)
+    with ProcessPoolExecutor(max_workers=n, mp_context=_mp_context()) as pool:
+        pending = {pool.submit(run_job, job, reduce): k for k, job in enumerate(jobs)}
+        done_count = 0
+        try:
+            while pending:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    k = pending.pop(fut)
+                    results[k] = fut.result()
+                    done_count += 1
+                    if progress is not None:
+                        progress(done_count, len(jobs), jobs[k])
+        except BaseException:
+            for fut in pending:
+                fut.cancel()
+            raise
+    return results
+
+
+def _run_dask(jobs, scheduler, progress, reduce) -> list:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise RuntimeError("running on a Dask cluster needs dask.distributed: pip install 'hilms-sil[cluster]'") from None
+    own = not isinstance(scheduler, Client)
+    client = Client(scheduler, timeout="30s") if own else scheduler
+    try:
+        futures = client.map(run_job, jobs, reduce=reduce, pure=False)
+        index = {f.key: k for k, f in enumerate(futures)}
+        results: list = [None] * len(jobs)
+        for done_count, fut in enumerate(as_completed(futures), start=1):
+            k = index[fut.key]
+            results[k] = fut.result()
+            if progress is not None:
+                progress(done_count, len(jobs), jobs[k])
+        return results
+    finally:
+        if own:
+            client.close()
+
+
+def rig_seconds_per_wall_second(results: Sequence, wall_s: float) -> float:
+    """Simulated rig-seconds of ``results`` (JobResults) per wall-clock second of the sweep."""
+    total = sum(r.sim_time_s for r in results)
+    return total / wall_s if wall_s > 0 else math.inf
+
