@@ -38,6 +38,7 @@ CHUNK_MS = 10.0  # --chunk-ms: 40 ms of simulation per chunk at --speedup max (e
 ALTITUDE_M = 2.0  # the rectangle preset's altitude (rig_emulator/presets/scenarios/rectangle.toml)
 WALL_TIMEOUT_S = 600.0
 POLL_S = 0.02
+SPARE_S = 5.0  # simulated seconds the rig runs past the recorded flight (the record ends at the first later message)
 FIELDS = {
     "ATTITUDE": ("time_boot_ms", "roll", "pitch", "yaw"),
     "ATTITUDE_TARGET": ("time_boot_ms", "type_mask", "q"),
@@ -94,7 +95,9 @@ def fly_rectangle(seed: int, duration_s: float, strategy: str = "smc-flc", width
 
     points = rectangle_points(width, height, ALTITUDE_M)
     mission = mission_from_enu(points, radius, "local")
-    args = ["--start-paused", "--no-persist", "--chunk-ms", repr(CHUNK_MS), "--scenario", "rectangle",
+    # --duration: the rig stops by itself a little after the flight is recorded, even if this process dies
+    args = ["--start-paused", "--no-persist", "--chunk-ms", repr(CHUNK_MS), "--duration", repr(duration_s + SPARE_S),
+            "--scenario", "rectangle",
             "--set", f"sim.seed={int(seed)}", "--set", f"control.strategy={strategy}"]
     try:
         rig = RigProcess(speedup="max", args=args)

@@ -3,39 +3,49 @@
 The command protocol (https://mavlink.io/en/services/command.html) has a sender resend a
 command whose COMMAND_ACK it did not get, with ``confirmation`` incremented on each resend.
 When the command arrived but its ACK was lost, the resend must not act again (a second
-MAV_CMD_HILMS_SHOCK would push the arm twice). A lossy link can also deliver one frame twice.
-So, per sender (system id, component id), the rig remembers the last command it received:
+MAV_CMD_HILMS_SHOCK would push the arm twice). A lossy link can also deliver one frame twice,
+or late: after the sender has moved on to its next command. So, per sender (system id,
+component id), the rig remembers the commands it acted on in the last :data:`WINDOW_S`
+seconds (command and parameters, the result, the latest transmission's ``confirmation``,
+sequence number and channel), and a command matching one of them is:
 
-* **retry**: ``confirmation`` > 0, the same command with the same parameters, within
-  :data:`WINDOW_S` of the previous transmission -> ACKed with the earlier result, not acted on;
-  the two cases below are not acted on and not ACKed again (one ACK per transmission: a second
-  ACK would arrive while the sender waits for the answer to its next command, and be taken for it);
-* **late original**: ``confirmation`` 0 after a retry of the same command and parameters
-  acted, with a sequence number before the retry's (a re-ordering link delivered the first
-  transmission after the second);
-* **duplicated frame**: the same peer (channel), MAVLink sequence number, command,
-  parameters and ``confirmation`` within :data:`FRAME_WINDOW_S` (this also covers COMMAND_INT,
-  which has no ``confirmation`` field). The window is short because
-  sequence numbers restart with every new connection: two runs of a script through one
-  router send identical frames, seconds apart, that are two commands.
+* a **retry** when ``confirmation`` > 0 -> ACKed with the earlier result, not acted on (not
+  ACKed when the sender has sent another command since: it had its answer and moved on);
+* a **duplicated frame** when it has the same channel, MAVLink sequence number and
+  ``confirmation`` as that command's latest transmission, within :data:`FRAME_WINDOW_S` (this
+  also covers COMMAND_INT, which has no ``confirmation`` field);
+* a **late original** when ``confirmation`` is 0, a retry of it already came and its sequence
+  number is before that retry's (a re-ordering link delivered the first transmission last).
 
-Anything else acts. Reading: the protocol carries no command identifier, so the same command
-sent twice on purpose within :data:`WINDOW_S`, whose first transmission was lost, looks like a
-retry and acts once; a sender wanting the command twice sends it again after the window or
-with ``confirmation`` 0 (which acts unless it is a duplicated frame).
+The last two neither act nor get a second ACK: one ACK per transmission, because a second one
+would reach the sender while it waits for the answer to its next command and be taken for it.
+Anything else acts. The frame window is short because sequence numbers restart with every new
+connection: two runs of a script through one router send identical frames, seconds apart,
+that are two commands.
+
+Reading: the protocol carries no command identifier, so a retry that a link holds back until
+just after the sender's next command, and that arrives first, is ACKed and that ACK can be
+taken for the next command's (rig-gcs also filters stale ACKs, :mod:`gcs_tools.stale_acks`);
+the same command sent twice on
+purpose within :data:`WINDOW_S`, whose first transmission was lost, looks like a retry and
+acts once; and a sender that sends more than 128 messages between a retried command and the
+same command sent again on purpose can make the second look like a late original. A sender
+wanting a command twice sends it with ``confirmation`` 0 after the first was answered.
 """
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
 
 WINDOW_S = 10.0  # longer than ground stations retry a command (QGroundControl, MAVSDK, rig-gcs: <= 6 s)
 FRAME_WINDOW_S = 1.0  # a link duplicates a frame within milliseconds (a relay's delay at most)
+PER_SENDER = 16  # commands remembered per sender
+SENDERS = 256  # senders remembered (bounded against spoofed ids)
 
 
 @dataclass
-class _Last:
-    key: tuple  # (command, params)
+class _Seen:
     result: int
     confirmation: int  # of the latest transmission of the command
     seq: int
@@ -46,28 +56,33 @@ class _Last:
 class CommandDedup:
     def __init__(self, window_s: float = WINDOW_S):
         self.window_s = window_s
-        self._last: dict[tuple, _Last] = {}
+        self._senders: OrderedDict = OrderedDict()  # sender -> OrderedDict((command, params) -> _Seen)
 
     def repeat_of(self, cmd, channel, now: float) -> tuple[int, bool] | None:
-        """(earlier result, answer it again?) if ``cmd`` from ``channel`` repeats the sender's last
-        command, else None. A retry is answered (its sender missed the ACK); a duplicated frame or a
-        late first transmission is not: its sender had, or will have, one ACK per transmission, and
-        a second would arrive while it waits for the answer to its next command."""
-        last = self._last.get(cmd.sender)
-        if last is None or now - last.time > self.window_s or last.key != (cmd.command, cmd.params):
+        """(earlier result, answer it again?) if ``cmd`` from ``channel`` repeats a command the
+        sender sent recently, else None (act on it)."""
+        seen = self._senders.get(cmd.sender, {}).get((cmd.command, cmd.params))
+        if seen is None or now - seen.time > self.window_s:
             return None
-        if (cmd.seq == last.seq and cmd.confirmation == last.confirmation and id(channel) == last.channel
-                and now - last.time <= FRAME_WINDOW_S):
-            return last.result, False  # the same frame again
-        if cmd.confirmation == 0 and last.confirmation > 0 and 0 < (last.seq - cmd.seq) % 256 < 128:
-            return last.result, False  # the first transmission, overtaken by its retry
+        if (cmd.seq == seen.seq and cmd.confirmation == seen.confirmation and id(channel) == seen.channel
+                and now - seen.time <= FRAME_WINDOW_S):
+            return seen.result, False  # the same frame again
+        if cmd.confirmation == 0 and seen.confirmation > 0 and 0 < (seen.seq - cmd.seq) % 256 < 128:
+            return seen.result, False  # the first transmission, overtaken by its retry
         if cmd.confirmation > 0:
-            last.confirmation, last.seq, last.channel, last.time = cmd.confirmation, cmd.seq, id(channel), now
-            return last.result, True
+            commands = self._senders[cmd.sender]
+            latest = next(reversed(commands)) == (cmd.command, cmd.params)
+            seen.confirmation, seen.seq, seen.channel, seen.time = cmd.confirmation, cmd.seq, id(channel), now
+            return seen.result, latest  # a retry of an older command: its sender has moved on, got its ACK
         return None
 
     def record(self, cmd, channel, result: int, now: float) -> None:
-        self._last[cmd.sender] = _Last((cmd.command, cmd.params), result, cmd.confirmation, cmd.seq, id(channel), now)
-        if len(self._last) > 1024:  # senders are a handful; bound the table against spoofed ids
-            oldest = min(self._last, key=lambda k: self._last[k].time)
-            del self._last[oldest]
+        commands = self._senders.pop(cmd.sender, None) or OrderedDict()
+        self._senders[cmd.sender] = commands  # most recent sender last
+        key = (cmd.command, cmd.params)
+        commands.pop(key, None)
+        commands[key] = _Seen(result, cmd.confirmation, cmd.seq, id(channel), now)
+        while len(commands) > PER_SENDER or (commands and now - next(iter(commands.values())).time > self.window_s):
+            commands.popitem(last=False)
+        while len(self._senders) > SENDERS:
+            self._senders.popitem(last=False)

@@ -107,3 +107,20 @@ def test_back_to_back_calibrations_are_refused(rig_and_calls):
         assert results == [M.MAV_RESULT_ACCEPTED] + [M.MAV_RESULT_TEMPORARILY_REJECTED] * 2
     finally:
         conn.close()
+
+
+def test_a_retry_arriving_after_the_next_command_does_not_act_again(rig_and_calls):
+    """The sender got its ACK and moved on; a retry the link held back arrives after the next command."""
+    rig, calls = rig_and_calls
+    conn = connect(rig.tcp_url)
+    mav = M.MAVLink(None, srcSystem=255, srcComponent=190)
+    try:
+        n = len(calls)
+        first, retry = _shock_frame(mav, 3.25), _shock_frame(mav, 3.25, confirmation=1)
+        conn.port.sendall(first)
+        assert _acks(conn, 1) == [M.MAV_RESULT_ACCEPTED]
+        conn.port.sendall(_shock_frame(mav, 3.5) + retry)
+        assert _acks(conn, 2) == [M.MAV_RESULT_ACCEPTED, None]  # 3.5 answered; the stale retry neither acts nor is answered
+        assert [c[1] for c in calls[n:]] == [3.25, 3.5]
+    finally:
+        conn.close()
