@@ -153,15 +153,20 @@ def sweep_single_probe(jobs: int, duration: float) -> dict:
     import pickle
 
     single_threaded_blas()
+    c0 = time.process_time()
     sweep = _sweep()
     from rig_emulator.simulation.run import Simulation
+
+    import_cpu_s = time.process_time() - c0
 
     with tempfile.TemporaryDirectory(prefix="hilms-bench-sweep-") as tmp:
         t0 = time.perf_counter()
         cal = make_calibration(tmp)
         calibrate_s = time.perf_counter() - t0
         batch = make_jobs(jobs, duration, cal)
+        c0 = time.process_time()
         warm = sweep.run_jobs(batch[:1], workers=1)  # loads (or compiles) the step loop
+        first_run_cpu_s = time.process_time() - c0
         setup_w = setup_c = run_w = run_c = sim = 0.0
         rtfs = []
         for job in batch:
@@ -193,6 +198,8 @@ def sweep_single_probe(jobs: int, duration: float) -> dict:
         "setup_s_per_rig_calibrating": own_w,
         "setup_cpu_s_per_rig_calibrating": own_c,
         "calibrate_cli_s": calibrate_s,
+        "import_cpu_s": import_cpu_s,
+        "first_run_cpu_s": first_run_cpu_s,
         "result_bytes": len(pickle.dumps(warm[0])),
         "duration_s": duration,
         "jobs": n,
@@ -307,6 +314,12 @@ def many_rigs(stats: dict[str, ProbeStats]) -> list[Metric]:
         single.metric("setup_cpu_s_per_rig_calibrating", "set-up CPU per run that runs the IMU calibration", "s",
                       note="what each rig of a distinct seed pays at start-up (the benchmark's rigs load one "
                            "stored calibration)"),
+        single.metric("import_cpu_s", "fresh process: CPU to import rig_emulator.sweep and the simulation", "s",
+                      note="what each sweep worker pays before its first rig"),
+        single.metric("first_run_cpu_s", "fresh process: CPU of the first run (numba cache load + one rig)", "s",
+                      skip_first=len(single.runs) > 1,
+                      note="repetitions after the first (the first may compile)"),
+        single.metric("result_bytes", "result sent back per rig (pickled JobResult, no series)", "bytes"),
     ]
     dask = all("dask_rig_s_per_wall_s" in r for n in SIZES for r in stats[probe_name(n)].runs)
     for n in SIZES:

@@ -19,6 +19,7 @@ the Fig. 19 rectangle this way).
 
 from __future__ import annotations
 
+import os
 import signal
 
 from rig_emulator.config.loader import ConfigError, load_config
@@ -57,6 +58,8 @@ def cmd_serve(args, overrides: dict) -> int:
         raise ConfigError(f"--duration {args.duration}: must be > 0")
     if not 0.1 <= args.chunk_ms <= 100.0:
         raise ConfigError(f"--chunk-ms {args.chunk_ms}: must be in [0.1, 100]")
+    if args.timing_log and not os.path.isdir(os.path.dirname(os.path.abspath(args.timing_log))):
+        raise ConfigError(f"--timing-log {args.timing_log}: its directory does not exist")
     key, key_source = signing_key_from_args(args, _log)
     state = open_state(args, args.home)
     try:
@@ -94,14 +97,14 @@ def _serve(args, overrides: dict, state, signing) -> int:
             print(f"rig-emulator: serving {url}", flush=True)
         server.run(args.duration)
     finally:
-        if server.timing is not None:
-            server.timing.reanchors = server.overruns
-            server.timing.write(args.timing_log)
         server.close()
         if signing is not None:
             signing.close()
         for s, handler in previous.items():
             signal.signal(s, handler)
+        if server.timing is not None:
+            server.timing.reanchors = server.overruns
+            server.timing.write(args.timing_log)
     c = server.counters
     print(f"rig-emulator: stopped at t = {rig.time_s:.3f} s; received {c.received}, sent {c.sent}, "
           f"dropped {dict(c.dropped)}", flush=True)

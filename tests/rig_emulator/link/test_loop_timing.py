@@ -88,3 +88,12 @@ def test_serve_writes_the_timing_log(tmp_path):
     assert np.all(log["start"] >= log["due"] - 1e-6)
     s = summarize(log)
     assert 0.5 < s["sim_per_wall"] < 1.5  # paced at real time, not as fast as possible
+
+
+def test_a_timing_log_in_a_missing_directory_is_refused_before_serving(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "rig_emulator", "serve", "--mavlink", "tcpin:127.0.0.1:0", "--duration", "0.1",
+         "--timing-log", str(tmp_path / "missing" / "t.npz")],
+        capture_output=True, text=True, timeout=240, cwd=tmp_path)
+    assert proc.returncode == 2 and "--timing-log" in proc.stderr
+    assert "serving" not in proc.stdout
