@@ -21,7 +21,7 @@ def leg_duration(sx, sy, sz, tx, ty, tz, speed, min_leg_time):
     return max(d / speed, min_leg_time)
 
 
-@jit
+@jit(nrt=False)
 def line_setpoint(t, t0, duration, sx, sy, sz, tx, ty, tz, out_pos, out_vel):
     """Desired position and velocity on the virtual line at time t (held at the end)."""
     tau = (t - t0) / duration

@@ -54,7 +54,7 @@ OUT_UXY = 18  # 2: virtual inputs uX, uY (Eq. 34)
 OUT_SIZE = 20
 
 
-@jit
+@jit(nrt=False)
 def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, ref, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
     """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays."""
     flags = 0

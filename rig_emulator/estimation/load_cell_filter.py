@@ -27,6 +27,7 @@ IIR output, Kalman thrust, Kalman thrust rate, consecutive rejections, initialis
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import namedtuple
 
@@ -59,7 +60,18 @@ def thrust_kalman_model(dt_s: float, sigma_meas_N: float, accel_noise_N_per_s2_r
 
 
 def design_thrust_kalman_gain(dt_s: float, sigma_meas_N: float, accel_noise_N_per_s2_rthz: float) -> np.ndarray:
-    """Steady-state Kalman gain (2,) of :func:`thrust_kalman_model` from the DARE."""
+    """Steady-state Kalman gain (2,) of :func:`thrust_kalman_model` from the DARE.
+
+    Designed once per parameter set and process (a fresh copy each call): every rig that
+    is built needs it, and scipy's DARE wakes OpenBLAS's worker threads, which then
+    busy-wait for tens of milliseconds; on a loaded 2-core machine they take CPU from the
+    step loop that starts right after.
+    """
+    return _design_thrust_kalman_gain(float(dt_s), float(sigma_meas_N), float(accel_noise_N_per_s2_rthz)).copy()
+
+
+@functools.lru_cache(maxsize=32)
+def _design_thrust_kalman_gain(dt_s: float, sigma_meas_N: float, accel_noise_N_per_s2_rthz: float) -> np.ndarray:
     F, H, Q, R = thrust_kalman_model(dt_s, sigma_meas_N, accel_noise_N_per_s2_rthz)
     P = solve_discrete_are(F.T, H.T, Q, R)  # prior covariance
     K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)

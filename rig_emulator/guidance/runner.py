@@ -49,7 +49,7 @@ GS_TARGET = 9  # 9: the current leg's target (the waypoint, X/Y resolved for fre
 GS_SIZE = 12
 
 
-@jit
+@jit(nrt=False)
 def _start_leg(t, pos, gp, gstate):
     i = int(gstate[GS_INDEX])
     gstate[GS_T0] = t
@@ -69,7 +69,7 @@ def _start_leg(t, pos, gp, gstate):
                                        gstate[GS_TARGET + 2], speed, gp.min_leg_time)
 
 
-@jit
+@jit(nrt=False)
 def _advance(t, pos, gp, gstate):
     gstate[GS_HOLD_UNTIL] = -1.0
     gstate[GS_INDEX] += 1.0
@@ -80,7 +80,7 @@ def _advance(t, pos, gp, gstate):
         _start_leg(t, pos, gp, gstate)
 
 
-@jit
+@jit(nrt=False)
 def start_at(index, t, pos, gp, gstate):
     """Begin flying to waypoint ``index`` on a virtual line from ``pos`` at time t."""
     gstate[GS_STARTED] = 1.0
@@ -90,7 +90,7 @@ def start_at(index, t, pos, gp, gstate):
     _start_leg(t, pos, gp, gstate)
 
 
-@jit
+@jit(nrt=False)
 def _waypoints(t, pos, gp, gstate, reached_t, ref):
     if gstate[GS_STARTED] == 0.0:
         start_at(0, t, pos, gp, gstate)
@@ -123,7 +123,7 @@ def _waypoints(t, pos, gp, gstate, reached_t, ref):
         ref[REF_ACC + k] = 0.0
 
 
-@jit
+@jit(nrt=False)
 def guidance_update(t, pos, gp, gstate, reached_t, ref):
     """Fill ``ref`` (controller.REF_* layout) for time t and the current position."""
     ref[REF_YAW] = gp.yaw

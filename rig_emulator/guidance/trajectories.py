@@ -5,7 +5,7 @@ import math
 from rig_emulator._jit import jit
 
 
-@jit
+@jit(nrt=False)
 def helix_eq46(t, pos, vel, acc):
     """Eq. 46 exactly as published (metres, seconds).
 
@@ -40,7 +40,7 @@ def helix_eq46(t, pos, vel, acc):
 
 
 
-@jit
+@jit(nrt=False)
 def harmonic_attitude(t, amplitude, omega, att, rate, acc):
     """Eq. 44 on each axis: ``x_des = A sin(omega t)`` with its rate and acceleration."""
     s = math.sin(omega * t)

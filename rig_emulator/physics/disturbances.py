@@ -30,7 +30,7 @@ def arm_direction(arm_index):
     return 0.0, -1.0
 
 
-@jit
+@jit(nrt=False)
 def wind_force(t, wind, gusts):
     """Wind plus active 1-cosine gusts at time t, world ENU (N)."""
     fx = wind[0]
@@ -47,7 +47,7 @@ def wind_force(t, wind, gusts):
     return fx, fy, fz
 
 
-@jit
+@jit(nrt=False)
 def shock_torque(t, shocks):
     """Body torque (N m, B) of the shocks active at time t: a tip push F along +z_B at p = l e_arm
     gives ``p x F = (p_y F, -p_x F, 0)`` with ``F l = torque``."""
@@ -62,7 +62,7 @@ def shock_torque(t, shocks):
     return tx, ty
 
 
-@jit
+@jit(nrt=False)
 def extra_mass_effects(extra, R, g):
     """Added inertia (dIxx, dIyy, dIzz) and gravity torque (tx, ty, tz) in B of the extra masses.
 

@@ -5,7 +5,7 @@ from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import quat_normalize
 
 
-@jit
+@jit(nrt=False)
 def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     """Advance ``x`` in place by one RK4 step of length ``h``.
 
@@ -39,7 +39,7 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
         apply_ground(x)
 
 
-@jit
+@jit(nrt=False)
 def apply_ground(x):
     """Virtual ground at Z = 0 (the paper's runs start on the ground): no sinking below it.
 

@@ -18,7 +18,7 @@ from rig_emulator.physics.motors import rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import quat_derivative, quat_to_rot
 
 
-@jit
+@jit(nrt=False)
 def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
     """dx = f(t, x) for the rig; ``p`` is a PhysicsParams namedtuple, ``R`` a 3x3 work array."""
     q0 = x[6]

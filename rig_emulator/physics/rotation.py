@@ -18,7 +18,7 @@ import numpy as np
 from rig_emulator._jit import jit
 
 
-@jit
+@jit(nrt=False)
 def quat_normalize(q):
     """Normalise a quaternion in place (guards RK4 drift off the unit sphere)."""
     n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
@@ -28,7 +28,7 @@ def quat_normalize(q):
     q[3] /= n
 
 
-@jit
+@jit(nrt=False)
 def quat_to_rot(q0, q1, q2, q3, R):
     """Rotation matrix of the unit quaternion (q0 scalar) into the 3x3 array ``R``."""
     R[0, 0] = 1.0 - 2.0 * (q2 * q2 + q3 * q3)
@@ -42,7 +42,7 @@ def quat_to_rot(q0, q1, q2, q3, R):
     R[2, 2] = 1.0 - 2.0 * (q1 * q1 + q2 * q2)
 
 
-@jit
+@jit(nrt=False)
 def quat_derivative(q0, q1, q2, q3, wx, wy, wz, dq):
     """Quaternion kinematics ``q' = 1/2 q (x) (0, omega_B)`` for body rates ``omega_B``."""
     dq[0] = 0.5 * (-q1 * wx - q2 * wy - q3 * wz)

@@ -233,7 +233,19 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
     ``q`` the quaternion of R_WB (scalar first), ``omega_B``/``omega_dot_B`` body rates and
     accelerations (B = FRD). ``walk`` (n, 3, 3) is the bias random-walk state, updated in
     place. A module in the stuck fault keeps its previous raw values. Writes ``raw_out``.
+
+    Callable from Python (it keeps numba's reference counting, which releases the ``rng``
+    it unboxes); the step loop calls :func:`_sample_imu_modules`, the same without it
+    (``rig_emulator/_jit.py``).
     """
+    _sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
+                        rng, raw_out)
+
+
+@jit(nrt=False)
+def _sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
+                        rng, raw_out):
+    """:func:`sample_imu_modules` without reference counting, for the step loop."""
     q0 = q[0]
     q1 = q[1]
     q2 = q[2]

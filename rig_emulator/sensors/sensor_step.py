@@ -23,7 +23,7 @@ from collections import namedtuple
 import numpy as np
 
 from rig_emulator._jit import jit
-from rig_emulator.sensors.imu_module import ImuModulesTruth, sample_imu_modules
+from rig_emulator.sensors.imu_module import ImuModulesTruth, _sample_imu_modules
 from rig_emulator.sensors.load_cell import LoadCellTruth, sample_load_cells
 
 SAMPLED_INERTIAL = 1
@@ -70,8 +70,9 @@ def sensors_step(step_index, q, omega_B, omega_dot_B, thrust_N, rotor_speed_rad_
     do_mag = step_index % imu.decim_mag == 0
     mask = 0
     if do_inertial or do_mag:
-        sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, imu, state.imu_walk,
-                           state.imu_fault_mode, state.imu_fault_magnitude, rng, imu_raw_out)
+        # the variant without reference counting: this runs on every step loop sample
+        _sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, imu, state.imu_walk,
+                            state.imu_fault_mode, state.imu_fault_magnitude, rng, imu_raw_out)
         if do_inertial:
             mask |= SAMPLED_INERTIAL
         if do_mag:

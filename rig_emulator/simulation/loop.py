@@ -66,7 +66,27 @@ def run_steps(
 
     Disarmed, the motors are commanded to 0 V and the controller is reset so that it
     starts afresh on arming.
+
+    The entry point Python calls: it keeps numba's reference counting, which releases the
+    ``rng`` it unboxes, and hands over to :func:`_run_steps`, compiled without it
+    (``rig_emulator/_jit.py``).
     """
+    return _run_steps(
+        k_start, n_steps, dt, ctrl_div, log_div,
+        x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
+        cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
+        sp, ss, rng,
+    )
+
+
+@jit(nrt=False)
+def _run_steps(
+    k_start, n_steps, dt, ctrl_div, log_div,
+    x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
+    cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
+    sp, ss, rng,
+):
+    """The step loop of :func:`run_steps` (no reference counting: no allocation here)."""
     ctrl_dt = dt * ctrl_div
     phi = 0.0
     theta = 0.0
@@ -117,7 +137,7 @@ def run_steps(
     return log_row
 
 
-@jit
+@jit(nrt=False)
 def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd):
     phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
     row[L.T] = t

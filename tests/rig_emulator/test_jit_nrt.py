@@ -1,0 +1,90 @@
+"""jit(nrt=False): the step loop runs without numba's reference counting (rig_emulator/_jit.py)."""
+
+import sys
+from collections import namedtuple
+
+import numba
+import numpy as np
+import pytest
+
+from protocol import waypoint_switching
+from rig_emulator._jit import jit
+from rig_emulator.config.loader import load_config
+from rig_emulator.control import controller
+from rig_emulator.guidance import runner, trajectories
+from rig_emulator.physics import disturbances, integrator, rigid_body, rotation
+from rig_emulator.sensors import imu_module
+from rig_emulator.simulation import loop
+from rig_emulator.simulation.run import Simulation
+
+Pair = namedtuple("Pair", "a b")
+
+
+@jit(cache=False)
+def _accumulate(a, out):
+    out[0] += a[0]
+
+
+def _loop_with_branches(p, out, n):
+    # what the step loop does: arrays taken out of a namedtuple, or sliced, handed to a
+    # function that is not inlined, in a loop with branches
+    for k in range(n):
+        if k % 2 == 0:
+            _accumulate(p.a, out)
+        else:
+            _accumulate(p.b[1:3], out)
+
+
+def test_nrt_false_compiles_without_reference_counting():
+    counted = jit(cache=False)(_loop_with_branches)
+    plain = jit(nrt=False, cache=False)(_loop_with_branches)
+    p = Pair(np.arange(3.0), np.arange(3.0) + 10.0)
+    for f in (counted, plain):
+        out = np.zeros(1)
+        f(p, out, 5)
+        assert out[0] == 3 * 0.0 + 2 * 11.0
+    assert "NRT_incref" in counted.inspect_llvm(counted.signatures[0])
+    ir = plain.inspect_llvm(plain.signatures[0])
+    assert "NRT_incref" not in ir and "NRT_decref" not in ir
+
+
+def test_nrt_false_refuses_to_allocate():
+    def allocates(n):
+        return np.zeros(n)[0]
+
+    with pytest.raises(numba.core.errors.TypingError):
+        jit(nrt=False, cache=False)(allocates)(3)
+    assert jit(cache=False)(allocates)(3) == 0.0
+
+
+# Every compiled function of the step loop that takes arrays and is not inline="always"
+# (inlined ones are compiled as part of their caller).
+STEP_LOOP = (
+    loop._run_steps, loop._log_row,
+    integrator.rk4_step, integrator.apply_ground, rigid_body.state_derivative,
+    disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
+    rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
+    controller.control_update,
+    runner.guidance_update, runner._waypoints, runner._start_leg, runner._advance, runner.start_at,
+    trajectories.helix_eq46, trajectories.harmonic_attitude, waypoint_switching.line_setpoint,
+    imu_module._sample_imu_modules,
+)
+
+
+@pytest.mark.parametrize("dispatcher", STEP_LOOP, ids=lambda d: d.py_func.__qualname__)
+def test_step_loop_functions_are_compiled_without_reference_counting(dispatcher):
+    assert dispatcher.targetoptions["_nrt"] is False
+
+
+def test_entry_point_keeps_reference_counting_and_releases_the_generator():
+    # an nrt=False function called from Python would keep one reference to the Generator
+    # per call; the entry points Python calls with one keep NRT for that reason
+    assert loop.run_steps.targetoptions["_nrt"] is True
+    assert imu_module.sample_imu_modules.targetoptions["_nrt"] is True
+    sim = Simulation(load_config(scenario="hover", overrides={"sim.duration": 1.0}))
+    rng = sim.sensing.run_rng
+    sim.advance(5)  # compiles or loads the loop
+    before = sys.getrefcount(rng)
+    for _ in range(200):
+        sim.advance(5)
+    assert sys.getrefcount(rng) == before
