@@ -71,6 +71,18 @@ def _write_series(result, path: Path) -> None:
     raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz, .csv or .tlog")
 
 
+def _failsafe_summary(result) -> dict | None:
+    """When and why the loss-of-control failsafe tripped in a headless run (None: it did not)."""
+    from rig_emulator.simulation.faults import failsafe_cause_text
+
+    fs = result.series["failsafe"]
+    if not np.any(fs > 0):
+        return None
+    i = int(np.argmax(fs > 0))
+    return {"t_s": float(result.series["t"][i]), "cause": failsafe_cause_text(int(fs[i])),
+            "action": result.config["failsafe.action"]}
+
+
 def cmd_simulate(args) -> int:
     from rig_emulator.simulation.run import Simulation
 
@@ -92,12 +104,16 @@ def cmd_simulate(args) -> int:
         print(json.dumps({"scenario": args.scenario, "strategy": args.strategy, "seed": args.seed,
                           "mean_errors": {k: (None if not math.isfinite(v) else v) for k, v in errors.items()},
                           "sim_time_s": result.sim_time_s, "wall_time_s": result.wall_time_s,
-                          "real_time_factor": result.real_time_factor}))
+                          "real_time_factor": result.real_time_factor, "failsafe": _failsafe_summary(result)}))
     else:
         print(f"scenario {args.scenario}, strategy {args.strategy}, seed {args.seed}: "
               f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
         print("mean errors (Eq. 45):")
         print(format_table(rows))
+        fs = _failsafe_summary(result)
+        if fs is not None:
+            what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
+            print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")
         if cfg["guidance.type"] == "waypoints":
             reached = result.reached_t
             done = int(np.isfinite(reached).sum())

@@ -165,15 +165,38 @@ SCHEMA: dict[str, Spec] = {
     "sensor_models.estimation": Spec("tree", "overrides of presets/sensors/estimation.toml (calibration procedure, guards, Kalman)"),
     "faults.events": Spec(
         "table_list",
-        "sensor faults switched on at a time (issue 9 builds on them): IMU modules and load cells",
+        "device faults switched on at a time (docs/FAULTS.md): IMU modules, load cells, motors",
         item={
             "t": F("when the fault starts", "s", 0.0),
-            "sensor": S("which kind of sensor", ("imu", "load_cell")),
-            "index": I("module 0..4 or cell 0..3", 0, 15),
-            "mode": S("fault mode (spike: load cells only)", ("none", "stuck", "dead", "bias", "noise", "spike")),
-            "magnitude": F("bias in counts, noise as a multiple of the nominal sigma, spike in counts", "", -1e6, 1e6),
+            "sensor": S("which kind of device", ("imu", "load_cell", "motor")),
+            "index": I("IMU module 0..4; load cell or motor 1..4 (the arm number)", 0, 15),
+            "mode": S("fault mode: imu none/stuck/dead/bias/noise, load_cell also spike, motor none/dead/thrust_loss",
+                      ("none", "stuck", "dead", "bias", "noise", "spike", "thrust_loss")),
+            "magnitude": F("bias in counts, noise as a multiple of the nominal sigma, spike in counts, "
+                           "thrust_loss the fraction of thrust lost in [0, 1]; unused by none/stuck/dead", "", -1e6, 1e6),
         },
     ),
+    # --- supervisor: health monitor and loss-of-control failsafe (control/supervisor.py) ----------------
+    "health.update_rate_hz": F("rate of the supervisor (health flags, loss-of-control failsafe), rounded to a whole "
+                               "number of control periods", "Hz", 1.0, 1e5),
+    "health.reject_window": F("an IMU module or load cell is flagged while the estimators reject it more than half "
+                              "of the time, averaged over this time constant (healthy again below a tenth)",
+                              "s", 0.0, 60.0, lo_open=True),
+    "health.accel_tolerance": F("the fused accelerometer is invalid when its magnitude leaves (1 +- this) g",
+                                "", 0.0, 1.0, lo_open=True),
+    "health.mag_tolerance": F("the fused magnetometer is invalid when its magnitude leaves (1 +- this) x the site "
+                              "field", "", 0.0, 1.0, lo_open=True),
+    "failsafe.enabled": Spec("bool", "detect loss of control while armed (false: never trip)"),
+    "failsafe.action": S("on loss of control: 'disarm' (motors to 0 V, the rig disarms) or 'report' (flag only)",
+                         ("disarm", "report")),
+    "failsafe.attitude_error_deg": F("loss of control when the roll or pitch error exceeds this for hold_time",
+                                     "deg", 1.0, 180.0),
+    "failsafe.rate_limit_deg_s": F("loss of control when the body rate exceeds this for hold_time",
+                                   "deg/s", 1.0, 1e5),
+    "failsafe.hold_time": F("how long a loss-of-control condition must hold without a break", "s", 0.0, 60.0,
+                            lo_open=True),
+    "failsafe.on_estimate_invalid": Spec("bool", "loss of control also when the attitude estimate the controllers "
+                                         "fly on is invalid (IMU majority lost or implausible) for hold_time"),
     # --- disturbances ----------------------------------------------------------------------------
     "disturbance.wind_force": V3("constant wind force on the body (world ENU), enters Eq. 1", "N", -1e3, 1e3),
     "disturbance.gusts": Spec(

@@ -7,9 +7,13 @@ Per load-cell sample (period ``dt_s``) and cell:
    ceiling) is discarded, and a reading that jumps from the previous accepted one by more
    than ``jump_threshold_grf`` is replaced by the previous accepted value. Reading: the
    paper never re-accepts; here after ``reaccept_after`` consecutive rejections a reading
-   within the ceiling is accepted again, so a genuine fast thrust change cannot lock the
-   guard forever (``reaccept_after = 0`` is the paper-faithful "never"). The first reading
-   is accepted if within the ceiling (else 0).
+   within the bounds is accepted again, so a genuine fast thrust change cannot lock the
+   guard forever (``reaccept_after = 0`` is the paper-faithful "never"). Reading (issue 9,
+   the paper's "reasonable bound for every variable"): a reading below ``min_thrust_grf``
+   is discarded like one above the ceiling - a cell under a motor cannot be pulled up by
+   hundreds of gram-force, but a dead cell (0 counts) reads about ``-C b`` = -850 grF, which
+   the jump guard alone would re-accept. The first reading is accepted if within the
+   bounds (else 0).
 3. Filter (``mode``): ``"none"``; ``"iir"``, the paper's first-order IIR low-pass
    ``y += alpha (x - y)`` with ``alpha = 1 - exp(-2 pi f_c dt)``; or ``"kalman"``, a
    steady-state Kalman filter of the 2-state model thrust + thrust rate driven by white
@@ -44,8 +48,8 @@ FILTER_MODES = {"none": FILTER_NONE, "iir": FILTER_IIR, "kalman": FILTER_KALMAN}
 
 LcFilterParams = namedtuple(
     "LcFilterParams",
-    ["mode", "zero_counts", "newton_per_count", "jump_threshold_N", "max_thrust_N", "reaccept_after",
-     "iir_alpha", "kalman_gain", "dt_s"],
+    ["mode", "zero_counts", "newton_per_count", "jump_threshold_N", "max_thrust_N", "min_thrust_N",
+     "reaccept_after", "iir_alpha", "kalman_gain", "dt_s"],
 )
 
 
@@ -88,6 +92,7 @@ def load_cell_filter_params(est_cfg: dict, calibration, dt_s: float) -> LcFilter
         newton_per_count=np.ascontiguousarray(calibration.c_grf_per_count * GRF_N, dtype=np.float64),
         jump_threshold_N=c["jump_threshold_grf"] * GRF_N,
         max_thrust_N=c["max_thrust_grf"] * GRF_N,
+        min_thrust_N=c["min_thrust_grf"] * GRF_N,
         reaccept_after=c["reaccept_after"],
         iir_alpha=1.0 - math.exp(-2.0 * math.pi * c["iir_cutoff_hz"] * dt_s),
         kalman_gain=design_thrust_kalman_gain(dt_s, c["kalman_measurement_sigma_grf"] * GRF_N,
@@ -112,7 +117,7 @@ def load_cell_filter_step(raw_counts, p, state, out_N):
     for i in range(raw_counts.shape[0]):
         f = p.newton_per_count[i] * (raw_counts[i] - p.zero_counts[i])
         if state[i, 5] == 0.0:
-            x = f if f <= p.max_thrust_N else 0.0
+            x = f if f >= p.min_thrust_N and f <= p.max_thrust_N else 0.0
             state[i, 0] = x
             state[i, 1] = x
             state[i, 2] = x
@@ -121,10 +126,11 @@ def load_cell_filter_step(raw_counts, p, state, out_N):
             state[i, 5] = 1.0
         else:
             prev = state[i, 0]
-            if f > p.max_thrust_N or abs(f - prev) > p.jump_threshold_N:
+            in_bounds = f >= p.min_thrust_N and f <= p.max_thrust_N
+            if not in_bounds or abs(f - prev) > p.jump_threshold_N:
                 rejected |= 1 << i
                 state[i, 4] += 1.0
-                if p.reaccept_after > 0 and state[i, 4] >= p.reaccept_after and f <= p.max_thrust_N:
+                if p.reaccept_after > 0 and state[i, 4] >= p.reaccept_after and in_bounds:
                     state[i, 0] = f
                     state[i, 4] = 0.0
             else:

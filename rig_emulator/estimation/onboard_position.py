@@ -4,7 +4,8 @@ On the HILMS the translation is never measured: the onboard computer integrates 
 from the filtered load-cell thrusts and the estimated attitude (Sec. 4-1). The
 disturbance forces of Eq. 1 are software inputs of the rig, so they enter here as they
 do in the physics. Semi-implicit Euler at the control period; the virtual ground (if on)
-applies as in the physics.
+applies as in the physics (:func:`rig_emulator.physics.integrator.apply_ground`: on the
+ground with a measured thrust below 5 % of the weight the vehicle rests).
 """
 
 from rig_emulator._jit import jit
@@ -26,3 +27,6 @@ def onboard_translation_step(dt, phi, theta, psi, u1, mass, g, fwx, fwy, fwz, gr
         state[2] = 0.0
         if state[5] < 0.0:
             state[5] = 0.0
+        if u1 < 0.05 * mass * g:  # motors stopped on the ground: resting, as in the physics
+            state[3] = 0.0
+            state[4] = 0.0

@@ -12,7 +12,8 @@ SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MISSION_START and
 DO_SET_MISSION_CURRENT (:mod:`rig_emulator.link.mission_exec`), PREFLIGHT_CALIBRATION (param1,
 gyro, or param2, magnetometer, or param5, accelerometer = 1: reruns the IMU calibration
 procedure of Sec. 4-1, disarmed only), MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
-MAV_CMD_HILMS_SENSOR_FAULT (IMU modules and load cells; motor faults are UNSUPPORTED).
+MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/FAULTS.md).
+A supported command with unusable parameters is DENIED with a STATUSTEXT saying why.
 A shock outside the ranges of the config's ``disturbance.shocks`` entries (torque within
 +-100 N m, duration in (0, 10] s) is DENIED with the reason; a calibration less than
 :data:`CALIBRATION_INTERVAL_S` after the previous one is TEMPORARILY_REJECTED (each run
@@ -30,6 +31,7 @@ from rig_emulator.config.loader import ConfigError, check_value
 from rig_emulator.config.schema import SCHEMA
 from rig_emulator.link.mission_exec import MISSION_COMMANDS
 from rig_emulator.link.stream_table import ON_REQUEST, STREAMS
+from rig_emulator.sensors.faults import FAULT_NAMES
 
 ACCEPTED, DENIED, UNSUPPORTED, FAILED = (M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED,
                                          M.MAV_RESULT_UNSUPPORTED, M.MAV_RESULT_FAILED)
@@ -170,27 +172,32 @@ def _calibration(cmd, srv, channel):
     return result, follow
 
 
-_FAULT_NAMES = {M.HILMS_FAULT_NONE: "none", M.HILMS_FAULT_STUCK: "stuck", M.HILMS_FAULT_DEAD: "dead",
-                M.HILMS_FAULT_BIAS: "bias", M.HILMS_FAULT_NOISE: "noise", M.HILMS_FAULT_SPIKE: "spike"}
+_DEVICES = {M.HILMS_SENSOR_KIND_IMU_MODULE: "imu", M.HILMS_SENSOR_KIND_LOAD_CELL: "load_cell",
+            M.HILMS_SENSOR_KIND_MOTOR: "motor"}
+_NEEDS_MAGNITUDE = ("bias", "noise", "spike", "thrust_loss")
+
+
+def _denied(srv, text: str):
+    return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, text)
 
 
 def _sensor_fault(cmd, srv, channel):
+    """MAV_CMD_HILMS_SENSOR_FAULT (kind, index, fault, magnitude); HILMS_FAULT codes are
+    rig_emulator.sensors.faults codes. The injection itself is announced by the fault
+    reporter (to every peer, like a fault from the config)."""
     kind, index, fault = cmd.int_param(1), cmd.int_param(2), cmd.int_param(3)
-    magnitude = cmd.p(4) or 0.0
     if kind is None or index is None or fault is None:
-        return DENIED, []
-    if kind == M.HILMS_SENSOR_KIND_IMU_MODULE:
-        sensor, unit = "imu", index
-    elif kind == M.HILMS_SENSOR_KIND_LOAD_CELL:
-        sensor, unit = "load_cell", index - 1  # load cells are numbered 1..4 like the arms
-    else:
-        return UNSUPPORTED, []
-    mode = _FAULT_NAMES.get(fault)
+        return _denied(srv, "fault rejected: kind, index and fault (params 1-3) must be whole numbers")
+    device = _DEVICES.get(kind)
+    if device is None:
+        return _denied(srv, f"fault rejected: kind {kind} unknown (0 IMU module, 1 load cell, 2 motor)")
+    mode = FAULT_NAMES.get(fault)
     if mode is None:
-        return UNSUPPORTED, []
-    label = f"IMU module {index}" if sensor == "imu" else f"load cell {index}"
-    return _act(srv, "sensor fault", srv.rig.set_sensor_fault, sensor, unit, mode, magnitude,
-                done=f"{label}: fault {mode} injected", severity=M.MAV_SEVERITY_WARNING)
+        return _denied(srv, f"fault rejected: fault {fault} unknown (0..{max(FAULT_NAMES)})")
+    magnitude = cmd.p(4)
+    if magnitude is None and mode in _NEEDS_MAGNITUDE:
+        return _denied(srv, f"fault rejected: {mode} needs a magnitude (param 4)")
+    return _act(srv, "fault", srv.rig.set_fault, device, index, mode, 0.0 if magnitude is None else magnitude)
 
 
 HANDLERS = {

@@ -101,6 +101,16 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "estimation.tau_yaw": ("EST_TAU_YAW", None),
     "estimation.accel_lowpass_hz": ("EST_ACC_LP_HZ", None),
     "estimation.iir_cutoff_hz": ("EST_IIR_HZ", None),
+    "health.update_rate_hz": ("HLT_RATE_HZ", None),
+    "health.reject_window": ("HLT_REJ_WIN", None),
+    "health.accel_tolerance": ("HLT_ACC_TOL", None),
+    "health.mag_tolerance": ("HLT_MAG_TOL", None),
+    "failsafe.enabled": ("FS_ENABLE", None),
+    "failsafe.action": ("FS_ACTION", None),
+    "failsafe.attitude_error_deg": ("FS_ATT_ERR", None),
+    "failsafe.rate_limit_deg_s": ("FS_RATE", None),
+    "failsafe.hold_time": ("FS_HOLD_T", None),
+    "failsafe.on_estimate_invalid": ("FS_ON_EST", None),
 }
 
 #: schema keys that are not parameters of a running rig, and why

@@ -31,6 +31,7 @@ from rig_emulator.link.command_dedup import CommandDedup
 from rig_emulator.link.commands import Command, execute
 from rig_emulator.link.counters import LinkCounters
 from rig_emulator.link.endpoints import open_endpoint
+from rig_emulator.link.fault_report import FaultReporter
 from rig_emulator.link.ftp import nak_for
 from rig_emulator.link.ideal_sensors import load_sensor_model
 from rig_emulator.link.mission_exec import MissionExecutor
@@ -72,6 +73,7 @@ class RigServer:
         self.mission = MissionExecutor(self, store=state.mission if state is not None else None)
         self.ctx.mission = self.mission
         self.mission_transfer = MissionTransfer(self, self.mission)
+        self.fault_reporter = FaultReporter()
         self.endpoints = []
         try:
             for spec in endpoints:
@@ -240,6 +242,16 @@ class RigServer:
         self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
+        self.report_faults()
+
+    def report_faults(self) -> None:
+        """STATUSTEXT for new fault injections and detections; a HEARTBEAT at once when the
+        failsafe trips or clears (:mod:`rig_emulator.link.fault_report`)."""
+        texts, failsafe_changed = self.fault_reporter.poll(self.rig)
+        for severity, text in texts:
+            self.statustext(None, severity, text)
+        if failsafe_changed:
+            self.broadcast_heartbeat()
 
     def emit_streams(self) -> None:
         now = self.rig.time_s

@@ -64,8 +64,12 @@ def hilms_imu_module(snap, ctx):
     return out
 
 
-def _load_health(readings) -> int:
-    return sum(1 << i for i, ok in enumerate(readings.load_healthy) if ok)
+def _load_health(snap, readings) -> int:
+    """Bit i: the cell of arm i + 1 is healthy (no injected fault, its readings not rejected by the guards)."""
+    f = snap.faults
+    if f is None or not f.cell_faults:
+        return sum(1 << i for i, ok in enumerate(readings.load_healthy) if ok)
+    return sum(1 << i for i, code in enumerate(f.cell_faults) if code == 0 and not (f.cells_flagged >> i) & 1)
 
 
 def hilms_load_cells(snap, ctx):
@@ -73,7 +77,7 @@ def hilms_load_cells(snap, ctx):
     return mavlink.MAVLink_hilms_load_cells_message(
         time_usec=U.time_usec(snap.time_s), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts],
         force_grf=[float(f) for f in r.load_force_grf], thrust_n=[float(f) for f in r.load_thrust_n],
-        health=_load_health(r))
+        health=_load_health(snap, r))
 
 
 def named_value_float(snap, ctx):

@@ -3,6 +3,26 @@ MISSION_CURRENT, and the on-request AUTOPILOT_VERSION. One builder per message, 
 
 Identity: MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_GENERIC, component MAV_COMP_ID_AUTOPILOT1; the
 flight mode is reported in PX4's custom-mode layout (:mod:`rig_emulator.link.modes`).
+
+Faults (docs/FAULTS.md) map onto SYS_STATUS health bits and HEARTBEAT.system_status from the
+snapshot's plain-data :class:`~rig_emulator.simulation.faults.FaultStatus`:
+
+* 3D_GYRO / 3D_ACCEL / 3D_MAG (the fused estimate the rig flies on): unhealthy while the
+  supervisor finds that kind's ensemble invalid (majority of modules rejected, or an
+  implausible magnitude);
+* 3D_GYRO2 / 3D_ACCEL2 / 3D_MAG2 (the module array, its redundancy): unhealthy while any
+  module has an injected fault or the ensemble rejects that kind of any module;
+* AHRS: unhealthy while the fused gyro or accel is invalid;
+* GPS (the rig's virtual position, integrated from the load cells, Eq. 1): unhealthy while
+  any load cell has an injected fault or the guards reject its readings (the load-cell
+  detail is in HILMS_LOAD_CELLS.health);
+* MOTOR_OUTPUTS: unhealthy while any motor has an injected fault, or the failsafe stopped them;
+* the control bits: unhealthy once the loss-of-control failsafe has tripped;
+* PREARM_CHECK: unhealthy while any of the above is.
+
+HEARTBEAT.system_status: EMERGENCY once the failsafe has tripped (until armed again),
+CRITICAL while armed with the attitude estimate invalid or the attitude error or body rate
+beyond its failsafe limit (before the hold time has passed), else ACTIVE (armed) / STANDBY.
 """
 
 from __future__ import annotations
@@ -11,6 +31,7 @@ import time
 from importlib import metadata
 
 from protocol.dialect import mavlink
+from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_RATE, INVALID_ACCEL, INVALID_GYRO, INVALID_MAG
 from rig_emulator.link import mavlink_units as U
 
 M = mavlink
@@ -21,6 +42,8 @@ CONTROL_BITS = (M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL | M.MAV_SYS_STATUS_
                 | M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL)
 ALWAYS_ON = M.MAV_SYS_STATUS_SENSOR_GPS | M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | M.MAV_SYS_STATUS_AHRS
 PRESENT = GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON | CONTROL_BITS | M.MAV_SYS_STATUS_PREARM_CHECK
+SENSOR_BITS = GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON
+_KINDS = ((GYRO, GYRO2, INVALID_GYRO), (ACCEL, ACCEL2, INVALID_ACCEL), (MAG, MAG2, INVALID_MAG))
 CAPABILITIES = (M.MAV_PROTOCOL_CAPABILITY_MISSION_INT | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
                 | M.MAV_PROTOCOL_CAPABILITY_MAVLINK2 | M.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
                 | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED)
@@ -39,26 +62,49 @@ def _package_version() -> str:
         return "0.0.0"
 
 
+def system_status(snap) -> int:
+    """MAV_STATE for HEARTBEAT (module doc)."""
+    f = snap.faults
+    if f is not None and f.failsafe:
+        return M.MAV_STATE_EMERGENCY
+    if not snap.armed:
+        return M.MAV_STATE_STANDBY
+    if f is not None and (f.alerts & (ALERT_ATTITUDE | ALERT_RATE) or f.estimate_invalid & (INVALID_GYRO | INVALID_ACCEL)):
+        return M.MAV_STATE_CRITICAL
+    return M.MAV_STATE_ACTIVE
+
+
 def heartbeat(snap, ctx):
     base = M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | M.MAV_MODE_FLAG_STABILIZE_ENABLED
     if snap.armed:
         base |= M.MAV_MODE_FLAG_SAFETY_ARMED
     return M.MAVLink_heartbeat_message(
         type=M.MAV_TYPE_QUADROTOR, autopilot=M.MAV_AUTOPILOT_GENERIC, base_mode=base,
-        custom_mode=ctx.modes.custom_mode, system_status=M.MAV_STATE_ACTIVE if snap.armed else M.MAV_STATE_STANDBY,
-        mavlink_version=3)
+        custom_mode=ctx.modes.custom_mode, system_status=system_status(snap), mavlink_version=3)
 
 
 def sensor_health_bits(snap, ctx) -> int:
-    """SYS_STATUS health: a sensor bit is healthy while every module's device of that kind is."""
-    r = ctx.readings(snap)
-    imu_ok = all(r.imu_healthy)
+    """SYS_STATUS health from the snapshot's fault status (mapping in the module doc)."""
     # The rig has no geofence, so none can be breached: ground stations such as MAVProxy read a
     # cleared GEOFENCE health bit as "fence breach" whether or not the fence is present.
-    health = ALWAYS_ON | CONTROL_BITS | M.MAV_SYS_STATUS_GEOFENCE
-    if imu_ok:
-        health |= GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2
-    if imu_ok and all(r.load_healthy):
+    health = SENSOR_BITS | CONTROL_BITS | M.MAV_SYS_STATUS_GEOFENCE
+    f = snap.faults
+    if f is not None:
+        imu_injected = any(f.imu_faults)
+        for s, (fused, array, invalid) in enumerate(_KINDS):
+            if f.estimate_invalid & invalid:
+                health &= ~fused
+            if imu_injected or f.imu_flagged[s]:
+                health &= ~array
+        if f.estimate_invalid & (INVALID_GYRO | INVALID_ACCEL):
+            health &= ~M.MAV_SYS_STATUS_AHRS
+        if any(f.cell_faults) or f.cells_flagged:
+            health &= ~M.MAV_SYS_STATUS_SENSOR_GPS
+        if any(f.motor_faults) or (f.failsafe and f.failsafe_action == "disarm"):
+            health &= ~M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
+        if f.failsafe:
+            health &= ~CONTROL_BITS
+    if health & (SENSOR_BITS | CONTROL_BITS) == SENSOR_BITS | CONTROL_BITS:
         health |= M.MAV_SYS_STATUS_PREARM_CHECK
     return health
 

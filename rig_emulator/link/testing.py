@@ -17,7 +17,8 @@ Two ways to run a rig:
       with RigThread(speedup=0) as rig:
           conn = connect(rig.tcp_url)
 
-Client helpers: ``recv`` (next matching message), ``command`` (COMMAND_LONG -> its ACK),
+Client helpers: ``recv`` (next matching message), ``recv_text`` (next STATUSTEXT, chunks
+joined), ``command`` (COMMAND_LONG -> its ACK),
 ``all_params`` (the whole parameter table), ``collect`` / ``count_in_window`` /
 ``stamp_s`` (count messages against their own simulated-time stamps).
 
@@ -95,6 +96,26 @@ def recv(conn, types, timeout: float = 10.0, condition=None):
         msg = conn.recv_match(type=types, blocking=True, timeout=min(0.2, max(deadline - time.monotonic(), 0.01)))
         if msg is not None and (condition is None or condition(msg)):
             return msg
+    return None
+
+
+def recv_text(conn, condition=None, timeout: float = 10.0):
+    """The next STATUSTEXT whose whole text (MAVLink 2 chunks joined by ``id``) satisfies
+    ``condition(text)``; returns ``(severity, text)`` or None after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    parts: dict[int, list] = {}
+    while time.monotonic() < deadline:
+        m = recv(conn, "STATUSTEXT", max(deadline - time.monotonic(), 0.01))
+        if m is None:
+            return None
+        text = m.text if isinstance(m.text, str) else m.text.decode("ascii", "replace")
+        if m.id:
+            parts.setdefault(m.id, []).append(text)
+            if len(text) == 50:  # more chunks follow
+                continue
+            text = "".join(parts.pop(m.id))
+        if condition is None or condition(text):
+            return m.severity, text
     return None
 
 

@@ -1,6 +1,7 @@
 """Fixed-step fourth-order Runge-Kutta for the rig state, and the virtual ground."""
 
 from rig_emulator._jit import jit
+from rig_emulator.physics.motors import thrust_from_voltage
 from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import quat_normalize
 
@@ -35,19 +36,31 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     for i in range(n):
         x[i] += sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     quat_normalize(x[6:10])
-    if p.ground:
-        apply_ground(x)
+    if p.ground and x[2] <= 0.0:
+        apply_ground(x, p)
+
+
+REST_THRUST_FRACTION = 0.05  # below this share of the weight a vehicle on the ground rests
 
 
 @jit(nrt=False)
-def apply_ground(x):
+def apply_ground(x, p):
     """Virtual ground at Z = 0 (the paper's runs start on the ground): no sinking below it.
 
     Reading: the HILMS integrates a free-flying vehicle; the ground only keeps a thrust
     deficit at start-up from sending the virtual vehicle below its take-off altitude. It is
-    frictionless, so a tilted thrust still moves the vehicle horizontally.
+    frictionless, so a tilted thrust still moves the vehicle horizontally. Reading (issue 9):
+    with the motors (nearly) stopped - total thrust below ``REST_THRUST_FRACTION`` of the
+    weight, e.g. after a disarm or the loss-of-control failsafe - a vehicle on the ground
+    rests instead of sliding on for ever.
     """
     if x[2] <= 0.0:
         x[2] = 0.0
         if x[5] < 0.0:
             x[5] = 0.0
+        f = 0.0
+        for i in range(4):
+            f += p.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], p.k_v, p.f_ceiling)
+        if f < REST_THRUST_FRACTION * p.mass * p.g:
+            x[3] = 0.0
+            x[4] = 0.0

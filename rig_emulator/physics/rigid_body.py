@@ -10,6 +10,8 @@
   and ``-T_B`` the shocks plus the extra masses' gravity torque.
 * Quaternion kinematics ``q' = q (x) (0, omega_B) / 2``.
 * Motor lag ``V' = (V_cmd - V) / tau_motor``.
+* Motor faults (issue 9): motor i produces ``thrust_efficiency[i]`` (1 healthy, 0 dead) of
+  Eq. 40's thrust; its rotor speed and reaction moment follow the thrust it produces.
 """
 
 from rig_emulator._jit import jit
@@ -30,10 +32,11 @@ def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
     wy = x[11]
     wz = x[12]
 
-    f1 = thrust_from_voltage(x[13], p.k_v, p.f_ceiling)
-    f2 = thrust_from_voltage(x[14], p.k_v, p.f_ceiling)
-    f3 = thrust_from_voltage(x[15], p.k_v, p.f_ceiling)
-    f4 = thrust_from_voltage(x[16], p.k_v, p.f_ceiling)
+    eff = p.thrust_efficiency  # 1 = healthy; a motor fault lowers it (sensors/faults.py)
+    f1 = eff[0] * thrust_from_voltage(x[13], p.k_v, p.f_ceiling)
+    f2 = eff[1] * thrust_from_voltage(x[14], p.k_v, p.f_ceiling)
+    f3 = eff[2] * thrust_from_voltage(x[15], p.k_v, p.f_ceiling)
+    f4 = eff[3] * thrust_from_voltage(x[16], p.k_v, p.f_ceiling)
     u1 = f1 + f2 + f3 + f4
     u2 = p.arm_length * (f4 - f2)
     u3 = p.arm_length * (f1 - f3)

@@ -158,6 +158,7 @@ SPECS: dict[str, dict[str, Any]] = {
         "load_cell_filter.mode": _Choice("none", "iir", "kalman"),
         "load_cell_filter.jump_threshold_grf": _pos(1e5),
         "load_cell_filter.max_thrust_grf": _pos(1e5),
+        "load_cell_filter.min_thrust_grf": _Num(-1e5, 0.0),
         "load_cell_filter.reaccept_after": _Num(0, 10**6, integer=True),
         "load_cell_filter.iir_cutoff_hz": _pos(1000.0),
         "load_cell_filter.kalman_measurement_sigma_grf": _pos(1e4),

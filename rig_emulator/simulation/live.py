@@ -19,6 +19,7 @@ from rig_emulator._jit import jit
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
+from rig_emulator.simulation.faults import FaultEvent, FaultStatus
 from rig_emulator.simulation.run import Simulation
 
 # keys that fix array sizes or rates of a running rig
@@ -66,7 +67,7 @@ def _fill_snapshot(x, pp, ref, cout, v_cmd, estimated, att_est, onboard, out):
         out[28 + i] = cout[OUT_ATT_RATE_DES + i]
         out[51 + i] = cout[OUT_S + i]
     for i in range(4):
-        f = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        f = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
         out[31 + i] = f
         out[35 + i] = cout[OUT_THRUST_CMD + i]
         out[39 + i] = v_cmd[i]
@@ -108,6 +109,7 @@ class RigSnapshot:
     true_quaternion: tuple = (1.0, 0.0, 0.0, 0.0)
     true_body_rates: tuple = (math.nan,) * 3
     sensors: "SensorSnapshot | None" = None  # None when the sensor models are off
+    faults: "FaultStatus | None" = None  # injected faults, the supervisor's detections and failsafe
 
     @property
     def rotation(self) -> np.ndarray:
@@ -244,7 +246,20 @@ class LiveRig:
             true_quaternion=tuple(t[61:65]),
             true_body_rates=tuple(t[65:68]),
             sensors=sensors,
+            faults=sim.fault_status(),
         )
+
+    def fault_status(self) -> FaultStatus:
+        """Injected faults, the supervisor's detections and the failsafe, now (cheap: no snapshot)."""
+        return self.sim.fault_status()
+
+    def fault_signature(self) -> tuple:
+        """Changes whenever :meth:`fault_status` may have changed (cheap: for pollers)."""
+        return len(self.sim.faults.events), self.sim.us.flags.tobytes()
+
+    def fault_events(self, since: int = 0) -> list[FaultEvent]:
+        """Every fault injection (config or command) from number ``since`` on, oldest first."""
+        return self.sim.faults.events[since:]
 
     def reached_times(self) -> np.ndarray:
         """Time each mission waypoint was reached (NaN until then)."""
@@ -269,12 +284,14 @@ class LiveRig:
             if key in _RESTART_ONLY and changes[key] != self.cfg.get(key):
                 raise ConfigError(f"{key}: cannot change while the rig runs; restart it with the new value")
         new_cfg = self.cfg.with_overrides(changes)
-        pp = physics_params(new_cfg)
+        pp = physics_params(new_cfg, self.sim.pp.thrust_efficiency)  # injected motor faults persist
         cp = control_params(new_cfg)
+        up = self.sim.supervisor_params(new_cfg)
         gp = self._guidance_from(new_cfg, self.sim.gp)
         dist_keys = [k for k in changes if k.startswith("disturbance.")]
         dist = disturbances(new_cfg) if dist_keys else self.sim.dist
         self.sim.cfg, self.sim.pp, self.sim.cp, self.sim.gp, self.sim.dist = new_cfg, pp, cp, gp, dist
+        self.sim.up = up
         return new_cfg
 
     def _guidance_from(self, cfg: RigConfig, current):
@@ -350,10 +367,11 @@ class LiveRig:
         shocks = np.vstack([keep.reshape(-1, 4), [[now, float(arm), float(torque), float(duration)]]])
         self.sim.dist = d._replace(shocks=np.ascontiguousarray(shocks))
 
-    def set_sensor_fault(self, sensor: str, index: int, mode: str, magnitude: float = 0.0) -> None:
-        """Inject (or with mode 'none' clear) a fault on IMU module ``index`` or load cell ``index``."""
-        self._require_sensors()
-        self.sim.set_sensor_fault(sensor, index, mode, magnitude)
+    def set_fault(self, device: str, index: int, mode: str, magnitude: float = 0.0) -> FaultEvent:
+        """Inject (or with mode 'none' clear) a fault now: ``device`` 'imu' (module 0..4),
+        'load_cell' or 'motor' (1..4, the arm number); see :mod:`rig_emulator.sensors.faults`.
+        Raises ValueError with the reason and changes nothing when the fault is not possible."""
+        return self.sim.set_fault(device, index, mode, magnitude)
 
     def _require_sensors(self) -> None:
         if not self.sim.sensing.params.simulate:

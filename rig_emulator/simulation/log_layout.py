@@ -22,7 +22,9 @@ POS_TRUE = 48  # 3: physics position (POS is what the controllers were fed)
 EULER_TRUE = 51  # 3: physics attitude (EULER is what the controllers were fed)
 THRUST_MEAS = 54  # 4: filtered load-cell thrusts (N)
 HEALTH = 58  # 2: rejected IMU modules mask, rejected load cells mask
-NCOLS = 60
+FAILSAFE = 60  # latched failsafe cause (control/supervisor.py ALERT_* bits); 0 = not tripped
+ESTIMATE_INVALID = 61  # fused IMU estimate invalid (supervisor INVALID_* bits: 1 gyro, 2 accel, 4 mag)
+NCOLS = 62
 
 NAMES = {
     "t": (T, 1),
@@ -47,4 +49,6 @@ NAMES = {
     "euler_true": (EULER_TRUE, 3),
     "thrust_meas": (THRUST_MEAS, 4),
     "health": (HEALTH, 2),
+    "failsafe": (FAILSAFE, 1),
+    "estimate_invalid": (ESTIMATE_INVALID, 1),
 }

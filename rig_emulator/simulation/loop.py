@@ -6,13 +6,17 @@ are sampled from the current state and the estimators take them in; every ``ctrl
 steps guidance and control run on the feedback the config selects (the rig's estimates,
 as on the hardware, or the true state) with a zero-order hold on the motor commands; a
 log row is written every ``log_div`` steps. It can be called repeatedly on the same
-arrays: a headless run calls it once, the MAVLink rig calls it in chunks.
+arrays: a headless run calls it once, the MAVLink rig calls it in chunks. After every
+``up.div``-th control update the supervisor (:mod:`rig_emulator.control.supervisor`) checks sensor
+health and loss of control; when its failsafe disarms, the rest of the call runs disarmed
+(the caller reads the latch and keeps the rig disarmed).
 
 Reading: the accelerometers' lever-arm term uses the angular acceleration of the
 previous step's first RK4 stage.
 """
 
 from rig_emulator._jit import jit
+from rig_emulator.control.supervisor import F_FAILSAFE, F_INVALID, supervise
 from rig_emulator.control.controller import (
     CS_STARTED,
     OUT_ATT_DES,
@@ -43,7 +47,7 @@ def _sense(k, x, pp, sp, ss, rng, omega_dot):
     """Sample the sensors due at step k and run the estimators on them."""
     if k % sp.suite.cells.decim == 0:  # the load cells need the motors' thrusts and speeds
         for i in range(4):
-            f = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+            f = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
             ss.thrust_true[i] = f
             ss.rotor_speed[i] = rotor_speed(f, pp.kf)
     mask = sensors_step(k, x[6:10], x[10:13], omega_dot, ss.thrust_true, ss.rotor_speed,
@@ -60,7 +64,7 @@ def run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng,
+    sp, ss, rng, up, us,
 ):
     """Advance the rig; returns the next free log row.
 
@@ -75,7 +79,7 @@ def run_steps(
         k_start, n_steps, dt, ctrl_div, log_div,
         x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
         cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-        sp, ss, rng,
+        sp, ss, rng, up, us,
     )
 
 
@@ -84,7 +88,7 @@ def _run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng,
+    sp, ss, rng, up, us,
 ):
     """The step loop of :func:`run_steps` (no reference counting: no allocation here)."""
     ctrl_dt = dt * ctrl_div
@@ -130,15 +134,18 @@ def _run_steps(
                     ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                     ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
                 )
+            if k % up.div == 0 and supervise(t, armed, sp.simulate, sp.estimated, phi, theta, wx, wy, wz, cout,
+                                             ss.awork.ensemble.rejected, ss.awork.combined, ss.health[1], up, us):
+                armed = False  # the failsafe cuts the motors from the next step on
         if k % log_div == 0 and log_row < log.shape[0]:
-            _log_row(log[log_row], t, x, pp, sp, ss, ref, cout, gstate, v_cmd)
+            _log_row(log[log_row], t, x, pp, sp, ss, ref, cout, gstate, v_cmd, us)
             log_row += 1
         rk4_step(t, dt, x, v_cmd, pp, wind, gusts, shocks, extra, work, R)
     return log_row
 
 
 @jit(nrt=False)
-def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd):
+def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd, us):
     phi, theta, psi = euler_from_quat(x[6], x[7], x[8], x[9])
     row[L.T] = t
     row[L.EULER_TRUE] = phi
@@ -168,7 +175,7 @@ def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd):
     row[L.EULER_RATE + 1] = dtheta
     row[L.EULER_RATE + 2] = dpsi
     for i in range(4):
-        row[L.THRUST + i] = thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        row[L.THRUST + i] = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
         row[L.V_CMD + i] = v_cmd[i]
         row[L.U + i] = cout[OUT_U + i]
         row[L.THRUST_MEAS + i] = ss.thrust_est[i] if sp.simulate else row[L.THRUST + i]
@@ -179,3 +186,5 @@ def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd):
     row[L.UXY + 1] = cout[OUT_UXY + 1]
     row[L.HEALTH] = ss.health[0]
     row[L.HEALTH + 1] = ss.health[1]
+    row[L.FAILSAFE] = us.flags[F_FAILSAFE]
+    row[L.ESTIMATE_INVALID] = us.flags[F_INVALID]

@@ -20,7 +20,8 @@ from rig_emulator.physics.motors import GRAM_FORCE_N
 
 PhysicsParams = namedtuple(
     "PhysicsParams",
-    "mass ixx iyy izz arm_length rotor_inertia km_over_kf g k_v f_ceiling v_max tau_motor kf ground",
+    "mass ixx iyy izz arm_length rotor_inertia km_over_kf g k_v f_ceiling v_max tau_motor kf ground "
+    "thrust_efficiency",  # (4,) share of Eq. 40's thrust each motor produces (motor faults)
 )
 
 ControlParams = namedtuple(
@@ -43,7 +44,8 @@ def _arr(values) -> np.ndarray:
     return np.ascontiguousarray(values, dtype=np.float64)
 
 
-def physics_params(cfg: RigConfig) -> PhysicsParams:
+def physics_params(cfg: RigConfig, thrust_efficiency: np.ndarray | None = None) -> PhysicsParams:
+    """Physics arguments; ``thrust_efficiency`` (4,) is the motor-fault array to keep (default: all healthy)."""
     k_v = cfg["motors.thrust_per_volt_grf"] * GRAM_FORCE_N
     return PhysicsParams(
         mass=cfg["airframe.mass"],
@@ -60,6 +62,7 @@ def physics_params(cfg: RigConfig) -> PhysicsParams:
         tau_motor=cfg["motors.time_constant"],
         kf=cfg["motors.kf"],
         ground=bool(cfg["sim.ground"]),
+        thrust_efficiency=np.ones(4) if thrust_efficiency is None else thrust_efficiency,
     )
 
 

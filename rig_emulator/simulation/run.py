@@ -16,8 +16,9 @@ from rig_emulator.physics import state as S
 from rig_emulator.physics.motors import voltage_for_thrust
 from rig_emulator.physics.rotation import quat_from_euler
 from rig_emulator.simulation import log_layout as L
+from rig_emulator.control.supervisor import F_FAILSAFE, reset_failsafe, supervisor_params, supervisor_state
+from rig_emulator.simulation.faults import FaultEvent, FaultInjector, FaultStatus, fault_status
 from rig_emulator.simulation.loop import run_steps
-from rig_emulator.sensors.faults import set_fault
 from rig_emulator.simulation.sensing import Sensing
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 
@@ -64,6 +65,11 @@ class Simulation:
         self.gp = guidance_params(cfg)
         self.dist = disturbances(cfg)
         self.sensing = Sensing(cfg, self.dt, np.random.SeedSequence(cfg["sim.seed"]))
+        suite = self.sensing.params.suite
+        self.up = self.supervisor_params(cfg)
+        self.us = supervisor_state(suite.imu.n_modules, suite.cells.n_cells)
+        self.faults = FaultInjector(self)
+        self._pending_faults = self.faults.schedule(cfg)
         self.x = np.zeros(S.SIZE)
         self.x[S.POS : S.POS + 3] = cfg["initial.position"]
         phi, theta, psi = (math.radians(a) for a in cfg["initial.euler_deg"])
@@ -86,7 +92,7 @@ class Simulation:
         self.log = np.full((log_capacity, L.NCOLS), np.nan)
         self.log_row = 0
         self.k = 0
-        self.armed = True
+        self._armed = True
         self._entry = None
         self._entry_key = None
 
@@ -94,7 +100,35 @@ class Simulation:
     def time(self) -> float:
         return self.k * self.dt
 
+    def supervisor_params(self, cfg: RigConfig):
+        """The supervisor's arguments for ``cfg`` (health thresholds, failsafe) on this rig's sensors."""
+        imu = self.sensing.params.suite.imu
+        return supervisor_params(cfg, imu.n_modules, imu.gravity_m_s2, float(np.linalg.norm(imu.earth_field_W)),
+                                 self.dt * self.ctrl_div, self.ctrl_div)
+
+    @property
+    def armed(self) -> bool:
+        return self._armed
+
+    @armed.setter
+    def armed(self, value: bool) -> None:
+        """Arming clears a latched failsafe (and its timers); disarming keeps it for the record."""
+        if value:
+            reset_failsafe(self.us)
+        self._armed = bool(value)
+
     def advance(self, n_steps: int) -> None:
+        """Run ``n_steps`` physics steps, switching the config's timed faults on at their step
+        (the loop is called in pieces between them, which changes nothing else)."""
+        end = self.k + n_steps
+        while self._pending_faults and self._pending_faults[0][0] < end:
+            k_event, e = self._pending_faults.pop(0)
+            if k_event > self.k:
+                self._advance(k_event - self.k)
+            self.faults.inject(e["sensor"], e["index"], e["mode"], e["magnitude"], source="config")
+        self._advance(end - self.k)
+
+    def _advance(self, n_steps: int) -> None:
         """Run ``n_steps`` physics steps through the compiled loop.
 
         numba's dispatcher types every argument on every call, and namedtuples take its slow
@@ -108,8 +142,8 @@ class Simulation:
             self.k, n_steps, self.dt, self.ctrl_div, self.log_div,
             self.x, self.v_cmd, self.pp, self.cp, self.gp, d.wind, d.gusts, d.shocks, d.extra,
             self.cstate, self.gstate, self.reached_t, self.ref, self.cout, self.scratch, self.work, self.R,
-            self.log, self.log_row, bool(self.armed),
-            self.sensing.params, self.sensing.state, self.sensing.run_rng,
+            self.log, self.log_row, bool(self._armed),
+            self.sensing.params, self.sensing.state, self.sensing.run_rng, self.up, self.us,
         )
         key = tuple(id(a) for a in args[5:] if not isinstance(a, (int, float, bool)))
         if key != self._entry_key:
@@ -120,6 +154,8 @@ class Simulation:
         else:
             self.log_row = self._entry(*args)
         self.k += n_steps
+        if self._armed and self.up.fs_disarm and self.us.flags[F_FAILSAFE] != 0:
+            self._armed = False  # the failsafe cut the motors inside the loop; the rig stays disarmed
 
     def warm_up(self) -> float:
         """Compile (or load from cache) the loop without advancing it; returns the seconds it took."""
@@ -127,34 +163,27 @@ class Simulation:
         self.advance(0)
         return time.perf_counter() - t0
 
-    def set_sensor_fault(self, sensor: str, index: int, mode: str, magnitude: float = 0.0) -> None:
-        """Switch an IMU module (``sensor='imu'``) or a load cell (``'load_cell'``) to a fault mode."""
-        st = self.sensing.state.sstate
-        if sensor == "imu":
-            set_fault(st.imu_fault_mode, st.imu_fault_magnitude, index, mode, magnitude, imu=True)
-        elif sensor == "load_cell":
-            set_fault(st.cell_fault_mode, st.cell_fault_magnitude, index, mode, magnitude, imu=False)
-        else:
-            raise ValueError(f"sensor {sensor!r}: must be 'imu' or 'load_cell'")
+    def set_fault(self, device: str, index: int, mode: str, magnitude: float = 0.0) -> FaultEvent:
+        """Switch IMU module ``index`` (0..4, ``device='imu'``), load cell or motor ``index``
+        (1..4, ``'load_cell'``, ``'motor'``) into a fault mode now (``'none'`` clears it).
+
+        Raises ValueError with the reason (unknown device or mode, index or magnitude out of
+        range); the rig is unchanged then.
+        """
+        return self.faults.inject(device, index, mode, magnitude)
+
+    def fault_status(self) -> FaultStatus:
+        return fault_status(self)
 
     def run(self, duration: float | None = None) -> SimResult:
         """Run the whole configured duration (or ``duration``) headless, as fast as possible.
 
-        The configured ``faults.events`` are switched on at their times (the run is advanced
-        in pieces between them, which changes nothing else).
+        The configured ``faults.events`` are switched on at their times (:meth:`advance`).
         """
         self.warm_up()
         n_steps = int(round((self.cfg["sim.duration"] if duration is None else duration) / self.dt))
-        events = sorted(self.cfg["faults.events"], key=lambda e: e["t"])
         t0 = time.perf_counter()
-        done = 0
-        for event in events:
-            k_event = min(n_steps, int(math.ceil(event["t"] / self.dt - 1e-9)))
-            if k_event > done:
-                self.advance(k_event - done)
-                done = k_event
-            self.set_sensor_fault(event["sensor"], event["index"], event["mode"], event["magnitude"])
-        self.advance(n_steps - done)
+        self.advance(n_steps)
         wall = time.perf_counter() - t0
         return SimResult(
             config=self.cfg,

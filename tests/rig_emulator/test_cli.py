@@ -50,3 +50,14 @@ def test_calibrate_then_fly_on_the_stored_calibration(tmp_path):
     assert p.returncode == 0, p.stderr
     p = _run("simulate", "--scenario", "hover", "--duration", "3", "--seed", "6", "--config", str(cfg))
     assert p.returncode == 2 and "recalibrate" in p.stderr
+
+
+def test_simulate_with_a_fault_reports_the_failsafe_and_bad_events_exit_2(capsys):
+    from rig_emulator.cli import main
+
+    dead = 'faults.events=[{t=5.0, sensor="motor", index=1, mode="dead", magnitude=0.0}]'
+    assert main(["simulate", "--scenario", "hover", "--duration", "7", "--set", dead]) == 0
+    assert "loss of control at t = 5." in capsys.readouterr().out
+    bad = 'faults.events=[{t=1.0, sensor="load_cell", index=0, mode="dead", magnitude=0.0}]'
+    assert main(["simulate", "--scenario", "hover", "--set", bad]) == 2
+    assert "faults.events[0]: load cell 0: must be 1..4" in capsys.readouterr().err

@@ -10,7 +10,7 @@ import pytest
 from protocol import waypoint_switching
 from rig_emulator._jit import jit
 from rig_emulator.config.loader import load_config
-from rig_emulator.control import controller
+from rig_emulator.control import controller, supervisor
 from rig_emulator.guidance import runner, trajectories
 from rig_emulator.physics import disturbances, integrator, rigid_body, rotation
 from rig_emulator.sensors import imu_module
@@ -67,7 +67,7 @@ STEP_LOOP = (
     controller.control_update,
     runner.guidance_update, runner._waypoints, runner._start_leg, runner._advance, runner.start_at,
     trajectories.helix_eq46, trajectories.harmonic_attitude, waypoint_switching.line_setpoint,
-    imu_module._sample_imu_modules,
+    imu_module._sample_imu_modules, supervisor.supervise,
 )
 
 

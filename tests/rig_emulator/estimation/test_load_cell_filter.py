@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 from filterpy.kalman import KalmanFilter
 
 from rig_emulator.estimation.estimation_config import load_estimation_config
@@ -52,6 +53,25 @@ def test_guards_hold_previous_value_on_jumps_and_above_850_grf():
     for _ in range(100):
         load_cell_filter_step(_counts([550] * 4), p0, s0, out)
     assert np.allclose(out / GRF_N, 400.0)
+
+
+def test_floor_guard_rejects_a_dead_cell_for_good():
+    """Issue 9: a dead cell (0 counts, about -850 grF) is discarded like a reading above the
+    ceiling - never re-accepted - so its thrust stays at the last accepted reading."""
+    p = _params(mode="iir", reaccept_after=3)
+    s = load_cell_filter_state(4)
+    out = np.zeros(4)
+    load_cell_filter_step(_counts([550] * 4), p, s, out)
+    for _ in range(200):
+        rej = load_cell_filter_step(np.array([*_counts([550] * 3), 0.0]), p, s, out)
+        assert rej == 0b1000
+    assert out[3] / GRF_N == pytest.approx(550.0)
+    off = _params(mode="iir", reaccept_after=3, min_thrust_grf=-1e5)  # without the floor: re-accepted
+    s = load_cell_filter_state(4)
+    load_cell_filter_step(_counts([550] * 4), off, s, out)
+    for _ in range(200):
+        load_cell_filter_step(np.array([*_counts([550] * 3), 0.0]), off, s, out)
+    assert out[3] / GRF_N < -800.0
 
 
 def _run(mode, thrust_grf, seed=0, noise_grf=22.0):

@@ -19,15 +19,28 @@ def _wp(seq, x, y, z):
     return MissionItem(seq=seq, frame=ENU, command=M.MAV_CMD_NAV_WAYPOINT, x=x, y=y, z=z)
 
 
-@pytest.fixture
-def flight():
-    with RigThread(speedup=0.0) as rig:
+def _armed_rig(overrides=None):
+    with RigThread(speedup=0.0, overrides=overrides) as rig:
         conn = connect(rig.tcp_url)
         conn.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
         assert recv(conn, "HEARTBEAT", 10) is not None
         assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
         yield rig, conn
         conn.close()
+
+
+@pytest.fixture
+def flight():
+    yield from _armed_rig()
+
+
+@pytest.fixture
+def pid_flight():
+    """A mission replaced while the rig flies at speed sends the paper's SMC into an 80 deg
+    attitude error for seconds when the upload comes late (the virtual vehicle hits the ground
+    and flies 160 m the wrong way before it recovers); the loss-of-control failsafe stops that
+    (docs/FAULTS.md). This protocol test does not depend on that luck: it flies the PID."""
+    yield from _armed_rig({"control.strategy": "pid"})
 
 
 def _until_state(conn, state, timeout=60.0):
@@ -64,8 +77,8 @@ def test_takeoff_waypoints_speed_change_and_land(flight):
     assert rig.server.rig.snapshot().position[2] < 0.1  # on the ground (reached: within the radius of it)
 
 
-def test_pause_resume_and_a_new_upload_during_flight(flight):
-    rig, conn = flight
+def test_pause_resume_and_a_new_upload_during_flight(pid_flight):
+    rig, conn = pid_flight
     items = [_wp(i, p[0], p[1], 1.0) for i, p in enumerate([(0, 0), (1.5, 0), (1.5, 1.0), (0, 1.0)])]
     assert MissionClient(conn).upload(items) == M.MAV_MISSION_ACCEPTED
     assert command(conn, M.MAV_CMD_DO_SET_MODE, BASE, 4, 4).result == M.MAV_RESULT_ACCEPTED  # MAVSDK's start

@@ -135,3 +135,32 @@ def test_rk4_attitude_matches_constant_rate_rotation():
     for k in range(1000):
         rk4_step(k * 1e-3, 1e-3, x, np.zeros(4), pp, NO_DIST.wind, NO_DIST.gusts, NO_DIST.shocks, NO_DIST.extra, work, R)
     assert euler_from_quat(*x[S.QUAT : S.QUAT + 4])[2] == pytest.approx(0.5, abs=1e-12)
+
+
+def test_motor_fault_scales_that_motors_thrust_torque_and_rotor_speed():
+    """Issue 9: motor 1 at 60 % of its thrust lowers u1, pitches (u3 < 0) and unbalances yaw."""
+    h = PP.mass * PP.g / 4
+    x = _state()
+    pp = PP._replace(thrust_efficiency=np.array([0.6, 1.0, 1.0, 1.0]))
+    dx = _deriv(x, pp=pp)
+    lost = 0.4 * h
+    assert dx[S.VEL + 2] == pytest.approx(-lost / PP.mass, rel=1e-9)
+    assert dx[S.OMEGA + 1] == pytest.approx(-PP.arm_length * lost / PP.iyy, rel=1e-9)
+    assert dx[S.OMEGA + 2] == pytest.approx(-PP.km_over_kf * lost / PP.izz, rel=1e-9)
+    dead = _deriv(x, pp=PP._replace(thrust_efficiency=np.array([1.0, 1.0, 0.0, 1.0])))
+    assert dead[S.OMEGA + 1] == pytest.approx(PP.arm_length * h / PP.iyy, rel=1e-9)
+
+
+def test_vehicle_with_stopped_motors_rests_on_the_ground():
+    """Issue 9 Reading: on the virtual ground without thrust (disarmed, failsafe) no sliding on."""
+    from rig_emulator.physics.integrator import apply_ground
+
+    pp = physics_params(load_config())
+    x = _state()
+    x[S.POS + 2] = -0.01
+    x[S.VEL : S.VEL + 3] = [2.0, -1.0, -3.0]
+    apply_ground(x, pp)  # hover thrust: frictionless ground, the vehicle slides
+    assert x[S.POS + 2] == 0.0 and list(x[S.VEL : S.VEL + 3]) == [2.0, -1.0, 0.0]
+    x[S.MOTOR_V : S.MOTOR_V + 4] = 0.0
+    apply_ground(x, pp)
+    assert list(x[S.VEL : S.VEL + 3]) == [0.0, 0.0, 0.0]
