@@ -20,6 +20,7 @@ not a silently different result.
 
 from __future__ import annotations
 
+import subprocess
 import time
 from dataclasses import dataclass
 
@@ -38,6 +39,7 @@ CHUNK_MS = 10.0  # --chunk-ms: 40 ms of simulation per chunk at --speedup max (e
 ALTITUDE_M = 2.0  # the rectangle preset's altitude (rig_emulator/presets/scenarios/rectangle.toml)
 WALL_TIMEOUT_S = 600.0
 POLL_S = 0.02
+RIG_EXIT_WAIT_S = 60.0  # wall seconds to wait for the rig's own exit at --duration before signalling it
 SPARE_S = 5.0  # simulated seconds the rig runs past the recorded flight (the record ends at the first later message)
 FIELDS = {
     "ATTITUDE": ("time_boot_ms", "roll", "pitch", "yaw"),
@@ -116,6 +118,13 @@ def fly_rectangle(seed: int, duration_s: float, strategy: str = "smc-flc", width
         finally:
             link.close()
     finally:
+        # The rig ends itself at --duration (moments after the flight at --speedup max); a
+        # SIGTERM sent while it is already shutting down would kill it with -15 after its
+        # handlers are restored, so wait for its own exit first and signal only if it hangs.
+        try:
+            rig.proc.wait(RIG_EXIT_WAIT_S)
+        except subprocess.TimeoutExpired:
+            pass
         code = rig.stop()
     if lost:
         raise OperationError(f"rectangle: {lost} telemetry messages were lost (MAVLink sequence gaps); the figures "
