@@ -33,6 +33,7 @@ import signal
 import sys
 from pathlib import Path
 
+from gcs_tools.arg_types import finite_number as _number
 from gcs_tools.errors import EXIT_OK, EXIT_USAGE, GcsError, OperationError, UsageError
 from protocol.mission_files import MissionFileError
 
@@ -49,14 +50,6 @@ def _positive(text: str) -> float:
     return v
 
 
-def _number(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"{text!r}: must be finite")
-    return v
 
 
 def _size(text: str) -> tuple[float, float]:

@@ -16,21 +16,9 @@ Protocol details and retries: :mod:`gcs_tools.params_client`; file formats:
 
 from __future__ import annotations
 
-import math
 
+from gcs_tools.arg_types import finite_number as _value
 from gcs_tools.errors import EXIT_OK, UsageError
-
-
-def _value(text: str) -> float:
-    import argparse
-
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"{text!r}: must be finite")
-    return v
 
 
 def add_param_parser(sub, positive) -> None:

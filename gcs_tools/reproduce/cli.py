@@ -6,32 +6,16 @@ Registered in :mod:`gcs_tools.cli` by :func:`add_parser`. Exit codes: 0 report w
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 
+from gcs_tools.arg_types import whole_number_at_least
 from gcs_tools.errors import EXIT_OK, UsageError
 from gcs_tools.reproduce.experiments import NAMES
 
 
-def _workers(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be >= 1")
-    return n
-
-
-def _seed(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if n < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be >= 0")
-    return n
+_workers = whole_number_at_least(1)
+_seed = whole_number_at_least(0)
 
 
 def add_parser(sub) -> None:
