@@ -114,9 +114,6 @@ def test_killed_logger_leaves_a_readable_log_at_steady_memory(rig_url, tmp_path)
     assert "HEARTBEAT" in dump.stdout
 
 
-# Speed-up 10, not the fixture's 20: a rig that falls behind the wall clock thins its
-# telemetry to keep the control rate, and on a busy 2-core machine 20x left fewer samples.
-@pytest.mark.hilms_rig(speedup=10)
 def test_fixture_flies_and_reports_mean_errors(hilms_rig):
     reached = hilms_rig.fly(rectangle_points(1, 1, 0.5))
     assert [r.index for r in reached] == [0, 1, 2, 3, 4]
