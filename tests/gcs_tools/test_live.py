@@ -115,7 +115,7 @@ def test_killed_logger_leaves_a_readable_log_at_steady_memory(rig_url, tmp_path)
 
 
 def test_fixture_flies_and_reports_mean_errors(hilms_rig):
-    reached = hilms_rig.fly(rectangle_points(1, 1, 0.5))
+    reached = hilms_rig.fly(rectangle_points(2, 2, 0.5))  # long enough for > 100 samples at default rates
     assert [r.index for r in reached] == [0, 1, 2, 3, 4]
     result = hilms_rig.finish()
     assert result.samples["x_m"] > 100 and result.samples["phi_deg"] > 100
