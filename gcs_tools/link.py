@@ -142,13 +142,31 @@ class Link:
         self.mav.request_data_stream_send(self.target_system, self.target_component, M.MAV_DATA_STREAM_ALL,
                                           int(round(hz)), 1 if hz > 0 else 0)
 
-    def home_position(self, timeout: float = 3.0):
-        """The vehicle's HOME_POSITION (MAV_CMD_GET_HOME_POSITION), or None when it does not send one."""
-        try:
-            self.command(M.MAV_CMD_GET_HOME_POSITION, timeout=timeout / 2, retries=1)
-        except OperationError:
-            pass
-        return self.recv("HOME_POSITION", timeout)
+    def home_position(self, timeout: float = COMMAND_TIMEOUT_S, attempts: int = COMMAND_RETRIES + 1):
+        """The vehicle's HOME_POSITION, asked for with MAV_CMD_GET_HOME_POSITION.
+
+        None when the vehicle refuses the command (it has no home); OperationError when neither
+        HOME_POSITION nor a refusal arrives after ``attempts`` requests, so a lossy link fails
+        clearly instead of giving a mission without its home. Each request is a new command
+        (``confirmation`` 0): a vehicle answers a retry of a command it already acted on with
+        the earlier ACK alone, without sending the message again.
+        """
+        refusals = (M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED, M.MAV_RESULT_FAILED,
+                    M.MAV_RESULT_TEMPORARILY_REJECTED)
+        for _ in range(attempts):
+            self.mav.command_long_send(self.target_system, self.target_component, M.MAV_CMD_GET_HOME_POSITION,
+                                       0, *([NAN] * 7))
+            msg = self.recv(["HOME_POSITION", "COMMAND_ACK"], timeout,
+                            lambda m: m.get_type() == "HOME_POSITION" or m.command == M.MAV_CMD_GET_HOME_POSITION)
+            while msg is not None and msg.get_type() == "COMMAND_ACK":
+                if msg.result in refusals:
+                    return None
+                # accepted: the message follows the ACK
+                msg = self.recv(["HOME_POSITION", "COMMAND_ACK"], timeout,
+                                lambda m: m.get_type() == "HOME_POSITION" or m.command == M.MAV_CMD_GET_HOME_POSITION)
+            if msg is not None:
+                return msg
+        raise OperationError(f"no HOME_POSITION from the vehicle after {attempts} MAV_CMD_GET_HOME_POSITION requests")
 
 
 def message_id(name: str) -> int:

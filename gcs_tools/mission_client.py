@@ -103,7 +103,7 @@ def upload(link: Link, mission: Mission, timeout: float = TIMEOUT_S, retries: in
 
 
 def download(link: Link, timeout: float = TIMEOUT_S, retries: int = RETRIES, progress=None) -> Mission:
-    """Download the vehicle's mission; the home position is its HOME_POSITION (None if it sends none)."""
+    """Download the vehicle's mission; the home position is its HOME_POSITION (None if it refuses to send one)."""
     target = (link.target_system, link.target_component)
 
     def request_list():
@@ -122,7 +122,7 @@ def download(link: Link, timeout: float = TIMEOUT_S, retries: int = RETRIES, pro
         if progress is not None:
             progress(seq, n)
     link.mav.mission_ack_send(target[0], target[1], M.MAV_MISSION_ACCEPTED, MISSION)
-    home = link.home_position()
+    home = link.home_position(timeout, retries + 1)
     home_t = None
     if home is not None:
         home_t = (home.latitude / HOME_LATLON_SCALE, home.longitude / HOME_LATLON_SCALE, home.altitude / HOME_ALT_SCALE)

@@ -135,5 +135,7 @@ def test_dead_link_fails_clearly_after_the_retries(rig, relay):
               r"no answer from the vehicle after MISSION_COUNT \(2 retries", 3)
         fails("mission download", lambda: mission_client.download(link, 0.1, 2),
               r"MISSION_REQUEST_LIST: no answer from the vehicle \(2 retries", 3)
+        fails("home position", lambda: link.home_position(0.1, 3),
+              r"no HOME_POSITION from the vehicle after 3 MAV_CMD_GET_HOME_POSITION requests", 3)
     assert rig.server.rig.cfg["smc.k"][0] != 1.0  # nothing got through
     print("\n100 % loss, time to the error: " + ", ".join(f"{k} {v:.2f} s" for k, v in figures.items()))
