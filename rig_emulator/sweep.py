@@ -17,11 +17,20 @@ Where the runs go:
 
 * ``scheduler`` (``"tcp://host:port"`` or a ``distributed.Client``) - one Dask task per job
   (``pip install 'hilms-sil[cluster]'``; every worker needs hilms-sil installed);
-* else ``workers`` (default ``os.cpu_count()``) local processes of a
-  ``concurrent.futures.ProcessPoolExecutor`` started with ``spawn`` (never ``fork``: the
-  caller may run threads; the workers are this process's children, so their CPU time shows
-  in ``resource.getrusage(RUSAGE_CHILDREN)`` once the sweep returns);
+* else ``pool`` (a :class:`SweepPool`), or the process's shared pool of ``workers``
+  (default ``os.cpu_count()``) local processes: a ``concurrent.futures.ProcessPoolExecutor``
+  started with ``spawn`` (never ``fork``: the caller may run threads) whose workers import
+  the simulation and load its compiled step loop once, when they start. The shared pool is
+  **kept warm between calls** (a second sweep pays no interpreter start, imports or numba
+  cache load; the first call pays them, about 1-3 s a worker) and is shut down at exit, by
+  :func:`shutdown_pool`, or when a call asks for another worker count. ``with SweepPool(n) as
+  pool: run_jobs(jobs, pool=pool)`` gives a pool of its own with a lifetime of its own;
 * ``workers=1`` (or a single job): serially in the calling process, no pool.
+
+Jobs go to the workers in batches that shrink towards the end of a sweep (guided
+scheduling): the first hold up to :data:`BATCH_RIG_SECONDS` simulated seconds, so short runs
+do not pay a round trip each, and the last are single jobs, so no worker idles while
+another finishes a long batch.
 
 What comes back: by default a :class:`JobResult` with the logged series named in
 ``SimJob.columns`` (all of them when ``None``, none with ``()``: the benchmark's many-rigs
@@ -43,12 +52,16 @@ raises while running stops the sweep with :class:`JobFailed` naming it.
 
 from __future__ import annotations
 
+import atexit
 import copy
 import hashlib
 import math
 import multiprocessing
 import os
+import threading
+import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
 
@@ -61,6 +74,11 @@ from rig_emulator.simulation.log_layout import NAMES as LOG_NAMES
 _SERIES = tuple(LOG_NAMES)  # the logged series a job may ask for
 
 Progress = Callable[[int, int, "SimJob"], None]
+
+#: Simulated seconds a batch of jobs sent to a worker holds at most (about 0.1 s of a
+#: worker's time at the full-fidelity rig's speed): a 5 s run costs about 10 ms, and the
+#: round trip of a task through the pool costs a good part of a millisecond of the caller's.
+BATCH_RIG_SECONDS = 60.0
 
 
 class JobFailed(RuntimeError):
@@ -194,17 +212,162 @@ def run_job(job: SimJob, reduce: Callable | None = None):
 
 def _mp_context():
     # spawn, not fork (the caller may run threads) nor forkserver (its workers would not be this
-    # process's children, and their CPU time would be missing from getrusage(RUSAGE_CHILDREN))
+    # process's children)
     return multiprocessing.get_context("spawn")
 
 
+def _warm_worker() -> None:
+    """A pool worker's start: import the simulation and load (or compile) its step loop by
+    running one physics step, so the first job does not pay it."""
+    from rig_emulator.config.loader import load_config
+    from rig_emulator.simulation.run import Simulation
+
+    Simulation(load_config(scenario="hover", overrides={"sim.duration": 0.001})).run()
+
+
+def _worker_pid() -> int:
+    return os.getpid()
+
+
+def _run_batch(jobs, reduce):
+    return [run_job(job, reduce) for job in jobs]
+
+
+class SweepPool:
+    """Warm local worker processes for :func:`run_jobs` (``pool=``); see the module docstring.
+
+    ``SweepPool(workers)`` starts ``workers`` spawned processes (default ``os.cpu_count()``),
+    each loading the compiled step loop; :meth:`close` (or the ``with`` block's end) stops
+    them. One sweep at a time runs on a pool. ``pids`` are the workers' process ids (e.g. to
+    read their CPU time, which ``getrusage(RUSAGE_CHILDREN)`` shows only once they exit).
+    """
+
+    def __init__(self, workers: int | None = None):
+        n = (os.cpu_count() or 1) if workers is None else workers
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ValueError(f"workers {workers!r}: must be an integer >= 1")
+        self.workers = n
+        self._executor = ProcessPoolExecutor(max_workers=n, mp_context=_mp_context(), initializer=_warm_worker)
+        self._lock = threading.Lock()
+        self._broken = False
+        # start every worker now (the executor would otherwise start them as work arrives)
+        futures = [self._executor.submit(_worker_pid) for _ in range(n)]
+        try:
+            wait(futures)
+            for f in futures:
+                f.result()
+        except BaseException:
+            self.close()
+            raise
+
+    @property
+    def broken(self) -> bool:
+        """A worker died (killed, out of memory, crashed): the pool runs nothing more."""
+        return self._broken or bool(getattr(self._executor, "_broken", False))
+
+    @property
+    def pids(self) -> list[int]:
+        return sorted(self._executor._processes or {})  # noqa: SLF001 - the executor keeps no public list
+
+    def close(self) -> None:
+        self._executor.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> "SweepPool":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def run(self, jobs: Sequence[SimJob], progress: Progress | None = None, reduce: Callable | None = None) -> list:
+        """Run validated ``jobs`` on the workers; results in job order."""
+        if not self._lock.acquire(blocking=False):
+            raise RuntimeError("a sweep is already running on this SweepPool")
+        try:
+            return self._run(list(jobs), progress, reduce)
+        finally:
+            self._lock.release()
+
+    def _batch_size(self, remaining: int, job: SimJob) -> int:
+        guided = math.ceil(remaining / (4 * self.workers))
+        cap = max(1, int(BATCH_RIG_SECONDS // job.duration)) if job.duration else 1
+        return max(1, min(guided, cap))
+
+    def _run(self, jobs: list, progress, reduce) -> list:
+        results: list = [None] * len(jobs)
+        pending: dict = {}  # future -> first job index of its batch
+        nxt = done_count = 0
+        try:
+            while nxt < len(jobs) or pending:
+                # keep two batches per worker in flight: a worker never waits for the caller
+                while nxt < len(jobs) and len(pending) < 2 * self.workers:
+                    size = self._batch_size(len(jobs) - nxt, jobs[nxt])
+                    try:
+                        fut = self._executor.submit(_run_batch, jobs[nxt:nxt + size], reduce)
+                    except BrokenProcessPool as exc:
+                        raise self._died(jobs[nxt], exc) from exc
+                    pending[fut] = nxt
+                    nxt += size
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    first = pending.pop(fut)
+                    try:
+                        batch = fut.result()
+                    except BrokenProcessPool as exc:
+                        raise self._died(jobs[first], exc) from exc
+                    for k, r in enumerate(batch, start=first):
+                        results[k] = r
+                        done_count += 1
+                        if progress is not None:
+                            progress(done_count, len(jobs), jobs[k])
+        except BaseException:
+            for fut in pending:
+                fut.cancel()
+            wait(pending)  # the workers finish what they hold: the pool stays usable
+            raise
+        return results
+
+    def _died(self, job: SimJob, exc: BaseException) -> JobFailed:
+        self._broken = True
+        return JobFailed(job, f"a worker process died while running it or its batch ({exc}); the pool "
+                              "is discarded, the next sweep starts new workers")
+
+
+_shared: SweepPool | None = None
+_shared_lock = threading.Lock()
+
+
+def _shared_pool(workers: int) -> SweepPool:
+    global _shared
+    with _shared_lock:
+        if _shared is not None and (_shared.workers != workers or _shared.broken):
+            _shared.close()
+            _shared = None
+        if _shared is None:
+            _shared = SweepPool(workers)
+        return _shared
+
+
+def shutdown_pool() -> None:
+    """Stop the shared worker processes of :func:`run_jobs` (the next pooled call starts new ones)."""
+    global _shared
+    with _shared_lock:
+        if _shared is not None:
+            _shared.close()
+            _shared = None
+
+
+atexit.register(shutdown_pool)
+
+
 def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: Any = None,
-             progress: Progress | None = None, reduce: Callable | None = None) -> list:
+             progress: Progress | None = None, reduce: Callable | None = None,
+             pool: SweepPool | None = None) -> list:
     """Run ``jobs`` and return their results in job order (see the module docstring).
 
     ``progress(done, total, job)`` is called in the calling process after each job finishes
     (in completion order). ``workers`` caps the local processes (default ``os.cpu_count()``);
-    ``scheduler`` sends the jobs to a Dask cluster instead.
+    ``pool`` runs them on a :class:`SweepPool` of the caller's; ``scheduler`` sends the jobs to
+    a Dask cluster instead.
     """
     jobs = list(jobs)
     for job in jobs:
@@ -217,36 +380,17 @@ def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: A
         return []
     if scheduler is not None:
         return _run_dask(jobs, scheduler, progress, reduce)
-    n = min(workers or os.cpu_count() or 1, len(jobs))
-    if n == 1:
+    if pool is not None:
+        return pool.run(jobs, progress, reduce)
+    n = workers or os.cpu_count() or 1
+    if n == 1 or len(jobs) == 1:
         out = []
         for k, job in enumerate(jobs):
             out.append(run_job(job, reduce))
             if progress is not None:
                 progress(k + 1, len(jobs), job)
         return out
-    return _run_pool(jobs, n, progress, reduce)
-
-
-def _run_pool(jobs, n, progress, reduce) -> list:
-    results: list = [None] * len(jobs)
-    with ProcessPoolExecutor(max_workers=n, mp_context=_mp_context()) as pool:
-        pending = {pool.submit(run_job, job, reduce): k for k, job in enumerate(jobs)}
-        done_count = 0
-        try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    k = pending.pop(fut)
-                    results[k] = fut.result()
-                    done_count += 1
-                    if progress is not None:
-                        progress(done_count, len(jobs), jobs[k])
-        except BaseException:
-            for fut in pending:
-                fut.cancel()
-            raise
-    return results
+    return _shared_pool(n).run(jobs, progress, reduce)
 
 
 def _run_dask(jobs, scheduler, progress, reduce) -> list:

@@ -9,6 +9,7 @@ it is not a valid calibration.
 
 from __future__ import annotations
 
+import copy
 import json
 import os
 from pathlib import Path
@@ -63,9 +64,33 @@ def _array(doc: dict, key: str, shape_len: int, path: Path) -> np.ndarray:
     return arr
 
 
+_READ: dict = {}  # (path, inode, size, mtime) -> calibration read from it, never handed out itself
+_READ_MAX = 32
+
+
 def load_calibration(path: str | os.PathLike) -> ImuCalibration | LoadCellCalibration:
-    """Read a calibration written by :func:`save_calibration`."""
+    """Read a calibration written by :func:`save_calibration`.
+
+    A file read before and unchanged since (same inode, size and modification time: a new
+    calibration is written by rename, so it has a new inode) is not parsed again: a sweep's
+    runs share one calibration file. Every call returns its own copy.
+    """
     path = Path(path)
+    try:
+        st = path.stat()
+    except OSError:
+        return _read_calibration(path)  # reports the error
+    key = (str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns)
+    hit = _READ.get(key)
+    if hit is None:
+        hit = _read_calibration(path)
+        if len(_READ) >= _READ_MAX:
+            _READ.clear()
+        _READ[key] = hit
+    return copy.deepcopy(hit)
+
+
+def _read_calibration(path: Path) -> ImuCalibration | LoadCellCalibration:
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError as exc:

@@ -10,6 +10,8 @@ of 250, 500, 1000, 2000")``.
 from __future__ import annotations
 
 import copy
+import functools
+import json
 import math
 import tomllib
 from importlib import resources
@@ -190,15 +192,50 @@ def load_sensor_preset(name: str, overrides: Mapping | None = None) -> dict:
 
     Returns the nested dict with numbers converted (ints stay ints, floats are floats).
     Raises ``ValueError`` naming ``<name>: <dotted.key> = <value>`` and the allowed range.
+    The result of a (name, overrides) pair is computed once per process (presets are package
+    data); every call returns its own copy.
     """
+    key = _overrides_key(overrides)
+    if key is None:  # not JSON-representable: validated uncached (and refused by a spec)
+        return _load_sensor_preset(name, overrides)
+    hit = _RESULTS.get((name, key))
+    if hit is None:
+        hit = _load_sensor_preset(name, overrides)  # raises on bad input: nothing is cached
+        if len(_RESULTS) >= _RESULTS_MAX:
+            _RESULTS.clear()
+        _RESULTS[(name, key)] = hit
+    return copy.deepcopy(hit)
+
+
+_RESULTS: dict = {}  # (name, canonical overrides) -> validated tree, never handed out itself
+_RESULTS_MAX = 256
+
+
+def _overrides_key(overrides: Mapping | None) -> str | None:
+    """A canonical text of ``overrides`` (None when JSON cannot show it: such input is
+    validated uncached)."""
+    if not overrides:
+        return ""
+    try:
+        return json.dumps(overrides, sort_keys=True, allow_nan=True)
+    except (TypeError, ValueError):
+        return None
+
+
+@functools.lru_cache(maxsize=None)
+def _preset_file(name: str) -> dict:
+    path = resources.files("rig_emulator") / "presets" / "sensors" / f"{name}.toml"
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML ({exc})") from exc
+
+
+def _load_sensor_preset(name: str, overrides: Mapping | None) -> dict:
     if name not in SPECS:
         raise ValueError(f"unknown sensor preset {name!r}: choose one of {', '.join(sorted(SPECS))}")
     path = resources.files("rig_emulator") / "presets" / "sensors" / f"{name}.toml"
-    try:
-        base = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML ({exc})") from exc
-    tree = copy.deepcopy(base)
+    tree = copy.deepcopy(_preset_file(name))
     if overrides:
         for key, value in _flatten(overrides).items():
             if key not in SPECS[name]:

@@ -7,6 +7,7 @@ into SI (degrees -> rad, gram-force -> N) and names into integer codes.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import namedtuple
 
@@ -66,13 +67,21 @@ def physics_params(cfg: RigConfig, thrust_efficiency: np.ndarray | None = None) 
     )
 
 
+@functools.lru_cache(maxsize=512)
+def _shared_axis(d1_e: float, d1_de: float, d1_u: float, r: tuple, geometry: str):
+    return fuzzy.make_axis(d1_e, d1_de, d1_u, r=r, geometry=geometry)
+
+
 def _flc_axes(cfg: RigConfig):
     r = tuple(cfg["flc.r"])
     geo = cfg["flc.geometry"]
     deg = math.radians
 
     def axis(d1_e, d1_de, d1_u):
-        return fuzzy.make_axis(d1_e, d1_de, d1_u, r=r, geometry=geo)
+        # built once per process for each geometry (many runs of a sweep share it); every rig
+        # gets its own arrays
+        shared = _shared_axis(float(d1_e), float(d1_de), float(d1_u), r, geo)
+        return type(shared)(*(np.array(a, copy=True) for a in shared))
 
     return dict(
         flc_phi=axis(deg(cfg["flc.d1_phi_deg"]), deg(cfg["flc.d1_dphi_deg_s"]), cfg["flc.d1_u2"]),

@@ -107,6 +107,11 @@ def test_mavsdk_flies_the_rectangle_with_8cm_switching():
                 finished = mission.is_mission_finished()
             wall = time.monotonic() - t0
             assert finished, f"mission not finished; progress {progress[-5:]}"
+            # the progress subscription is a separate gRPC stream: its last callback can come after
+            # is_mission_finished() already answers True
+            settle = time.monotonic() + 5.0
+            while time.monotonic() < settle and (not progress or progress[-1] != (len(items), len(items))):
+                time.sleep(0.05)
             assert progress and progress[-1] == (len(items), len(items)), progress[-5:]
             assert len(attitudes) > 20 and len(positions) > 20
             assert all(math.isfinite(a.roll_deg) and abs(a.roll_deg) < 30 for a in attitudes)
