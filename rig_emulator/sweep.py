@@ -67,7 +67,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from rig_emulator.config.loader import ConfigError, RigConfig, load_config
+from rig_emulator.config.loader import ConfigError, RigConfig, check_config, load_config
 from rig_emulator.config.schema import STRATEGIES
 from rig_emulator.simulation.log_layout import NAMES as LOG_NAMES
 
@@ -140,6 +140,21 @@ class SimJob:
     def describe(self) -> str:
         head = self.label or f"{self.scenario}/{self.strategy}"
         return f"job {head!r} (seed {self.seed})"
+
+    def _flat_overrides(self) -> dict:
+        flat = dict(self.overrides)
+        flat["control.strategy"] = self.strategy
+        flat["sim.seed"] = self.seed
+        if self.duration is not None:
+            flat["sim.duration"] = self.duration
+        return flat
+
+    def check(self) -> None:
+        """Raise the ConfigError (naming the job) that :meth:`config` would, without building it."""
+        try:
+            check_config(airframe=self.airframe, scenario=self.scenario, overrides=self._flat_overrides())
+        except ConfigError as exc:
+            raise ConfigError(f"{self.describe()}: {exc}") from None
 
     def config(self) -> RigConfig:
         """The validated configuration this job runs (ConfigError naming the job otherwise)."""
@@ -222,7 +237,8 @@ def _warm_worker() -> None:
     from rig_emulator.config.loader import load_config
     from rig_emulator.simulation.run import Simulation
 
-    Simulation(load_config(scenario="hover", overrides={"sim.duration": 0.001})).run()
+    # no calibration procedure: the warm-up needs the compiled loop, not a 0.1 s LM fit
+    Simulation(load_config(scenario="hover", overrides={"sim.duration": 0.001, "sensors.calibration": "none"})).run()
 
 
 def _worker_pid() -> int:
@@ -373,7 +389,7 @@ def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: A
     for job in jobs:
         if not isinstance(job, SimJob):
             raise TypeError(f"run_jobs takes SimJob items, got {type(job).__name__}")
-        job.config()  # bad input fails here, before anything runs
+        job.check()  # bad input fails here, before anything runs
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers {workers!r}: must be an integer >= 1")
     if not jobs:

@@ -36,7 +36,6 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from scipy.linalg import solve_discrete_are
 
 from rig_emulator._jit import jit
 from rig_emulator.sensors.load_cell import GRF_N
@@ -77,6 +76,8 @@ def design_thrust_kalman_gain(dt_s: float, sigma_meas_N: float, accel_noise_N_pe
 @functools.lru_cache(maxsize=32)
 def _design_thrust_kalman_gain(dt_s: float, sigma_meas_N: float, accel_noise_N_per_s2_rthz: float) -> np.ndarray:
     F, H, Q, R = thrust_kalman_model(dt_s, sigma_meas_N, accel_noise_N_per_s2_rthz)
+    from scipy.linalg import solve_discrete_are  # imported when first needed (start-up time)
+
     P = solve_discrete_are(F.T, H.T, Q, R)  # prior covariance
     K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
     return np.ascontiguousarray(K[:, 0])

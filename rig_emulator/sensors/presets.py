@@ -17,6 +17,8 @@ import tomllib
 from importlib import resources
 from typing import Any, Mapping
 
+from rig_emulator.fast_copy import fast_deepcopy
+
 
 class _Num:
     def __init__(self, lo: float, hi: float, integer: bool = False, lo_open: bool = False):
@@ -204,7 +206,7 @@ def load_sensor_preset(name: str, overrides: Mapping | None = None) -> dict:
         if len(_RESULTS) >= _RESULTS_MAX:
             _RESULTS.clear()
         _RESULTS[(name, key)] = hit
-    return copy.deepcopy(hit)
+    return fast_deepcopy(hit)
 
 
 _RESULTS: dict = {}  # (name, canonical overrides) -> validated tree, never handed out itself

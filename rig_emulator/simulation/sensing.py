@@ -7,7 +7,6 @@ and each reproducible: the same seed gives bit-identical runs.
 
 from __future__ import annotations
 
-import copy
 import json
 import os
 from collections import OrderedDict, namedtuple
@@ -16,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from rig_emulator.config.loader import ConfigError, RigConfig
+from rig_emulator.fast_copy import fast_deepcopy
 from rig_emulator.estimation.attitude_pipeline import make_attitude_chain
 from rig_emulator.estimation.calibration_file import load_calibration
 from rig_emulator.estimation.complementary import complementary_params
@@ -70,13 +70,19 @@ def build_sensing(cfg: RigConfig, dt: float) -> "Sensing":
     key = _build_key(cfg, dt)
     if key is not None and key in _BUILT:
         _BUILT.move_to_end(key)
-        return copy.deepcopy(_BUILT[key])
+        return _copy_sensing(_BUILT[key])
     sensing = Sensing(cfg, dt, np.random.SeedSequence(cfg["sim.seed"]))
     if key is not None:
-        _BUILT[key] = copy.deepcopy(sensing)
+        _BUILT[key] = _copy_sensing(sensing)
         while len(_BUILT) > _BUILT_MAX:
             _BUILT.popitem(last=False)
     return sensing
+
+
+def _copy_sensing(sensing: "Sensing") -> "Sensing":
+    out = object.__new__(Sensing)
+    out.__dict__.update(fast_deepcopy(sensing.__dict__))
+    return out
 
 
 class Sensing:
