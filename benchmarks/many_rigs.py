@@ -28,15 +28,19 @@ Probes (fresh processes, numba cache warm):
   (validation, batching, runs, results), and CPU seconds of this process and its workers
   (``/proc/PID/stat``), which do not depend on what else the machine runs.
 
-Figures. **Parallel efficiency** (the issue's) = aggregate rig-s per wall s / (single-rig
-real-time factor x cores), both from the same repetition; target >= 80 %. It counts wall
-time, so whatever else runs on the machine lowers it; the target applies to the warm sweep
-(the cold one is reported beside it). Beside it, for the diagnosis, two figures counted in
-CPU time (the caller's ``process_time`` and the workers' ``/proc`` counters), which other load does not change: the **CPU efficiency** = rig-s per
-CPU-s of the sweep / simulated s per CPU-s of a single rig's run (the share of the sweep's
-CPU time that simulates: 1 - what set-up, workers' start and the pool cost), and the same
-against the serial runs with their set-up (what the pool alone costs); and the cores the
-sweep kept busy (CPU s / wall s).
+Figures. **Parallel efficiency** (the issue's) = aggregate rig-s per wall s of the warm
+sweeps / (single-rig real-time factor x cores), with the single-rig figure measured next to
+the sweeps, in the sweep's own process (the same runs one after another, just before and
+just after them); target >= 80 %. This machine's speed changes by up to 1.8x from one
+second to the next (other tenants of the host: a rig's 5 s run takes 5 ms in one stretch
+and 9 ms in the next), so a reference measured in another process at another time (the
+``sweep-single`` probe; that ratio is shown too) says as much about the host as about the
+sweep; ``reference after / before`` shows how much the speed moved during the sweeps. The
+efficiency counts wall time, so whatever else runs on the machine lowers it. Beside it, the
+**CPU efficiency** (the caller's ``process_time`` and the workers' ``/proc`` counters) =
+rig-s per CPU-s of the sweeps / the reference runs' rig-s per CPU-s: the share of the
+sweeps' CPU time that simulates (1 - what set-up, batching and result traffic cost), which
+other load does not change; and the cores the sweeps kept busy (CPU s / wall s).
 
 BLAS threads. Both probes run with one BLAS thread per process (``OPENBLAS_NUM_THREADS=1``,
 inherited by the workers): with OpenBLAS's default of one thread per core, a rig's set-up
@@ -177,7 +181,10 @@ def sweep_single_probe(jobs: int, duration: float) -> dict:
             run_c += c2 - c1
             sim += r.sim_time_s
             rtfs.append(r.sim_time_s / r.wall_time_s)
-        # a rig that runs the calibration procedure itself at start-up
+        # a rig that runs the calibration procedure itself at start-up (scipy's optimiser imported
+        # first: a worker imports it once, for its first such rig)
+        import scipy.optimize  # noqa: F401
+
         own = sweep.SimJob(SCENARIO, STRATEGY, seed=SEED, duration=duration, columns=())
         w0, c0 = time.perf_counter(), time.process_time()
         Simulation(own.config())
@@ -241,15 +248,40 @@ def _pool_cpu(pids) -> float:
     return sum(procfs.cpu_seconds(pid) for pid in pids)
 
 
+#: Runs of the single-rig reference taken in the sweep's own process, just before and just after
+#: the warm sweeps (so the reference and the sweep see the machine in the same state).
+ADJACENT_REFERENCE_RUNS = 10
+#: Warm sweeps repeat until they have taken this long (a sweep of 10 rigs takes about 50 ms).
+MIN_WARM_WALL_S = 1.0
+
+
+def _adjacent_reference(sweep, jobs) -> tuple[list[float], float, float]:
+    """Single-rig real-time factors of ``jobs`` run one after another in this process (compiled
+    loop, wall), plus their simulated seconds and the CPU seconds of those runs."""
+    from rig_emulator.simulation.run import Simulation
+
+    rtfs, sim, cpu = [], 0.0, 0.0
+    for job in jobs:
+        rig = Simulation(job.config())
+        c0 = time.process_time()
+        r = rig.run()
+        cpu += time.process_time() - c0
+        sim += r.sim_time_s
+        rtfs.append(r.sim_time_s / r.wall_time_s)
+    return rtfs, sim, cpu
+
+
 def sweep_probe(n: int, duration: float) -> dict:
     """``n`` runs over all local cores with ``rig_emulator.sweep.run_jobs`` (and a Dask cluster if given).
 
     Two timings. **Cold**: the first sweep of a fresh process, the pool's start included
     (``SweepPool``: spawn, imports, numba cache load in each worker). **Warm**: the same
     sweep again on the started pool, as every sweep after the first in a session, a
-    notebook or a long-lived script (``run_jobs`` keeps its pool between calls). CPU time:
-    this process (``process_time``) and each worker's (``/proc/PID/stat``), sampled around
-    each part.
+    notebook or a long-lived script (``run_jobs`` keeps its pool between calls), repeated
+    until :data:`MIN_WARM_WALL_S` has passed. The **adjacent reference**: the single-rig
+    real-time factor of :data:`ADJACENT_REFERENCE_RUNS` of the same runs, one after another in
+    this process, just before and just after the warm sweeps. CPU time: this process
+    (``process_time``) and each worker's (``/proc/PID/stat``), sampled around each part.
     """
     single_threaded_blas()
     sweep = _sweep()
@@ -261,6 +293,8 @@ def sweep_probe(n: int, duration: float) -> dict:
     with tempfile.TemporaryDirectory(prefix="hilms-bench-sweep-") as tmp:
         cal = make_calibration(tmp)
         batch = make_jobs(n, duration, cal)
+        ref_jobs = [batch[k * len(batch) // ADJACENT_REFERENCE_RUNS] for k in range(ADJACENT_REFERENCE_RUNS)]
+        _adjacent_reference(sweep, ref_jobs[:1])  # loads the step loop in this process
         load = procfs.MachineLoad().start()
         c0 = time.process_time()
         t0 = time.perf_counter()
@@ -269,20 +303,32 @@ def sweep_probe(n: int, duration: float) -> dict:
             start_wall = time.perf_counter() - t0
             start_cpu = (time.process_time() - c0) + _pool_cpu(pool.pids)
             figs = {"pool_start_s": start_wall, "pool_start_cpu_s": start_cpu}
-            for label in ("cold_", ""):
-                w_cpu0, p_cpu0 = _pool_cpu(pool.pids), time.process_time()
-                t0 = time.perf_counter()
-                results = sweep.run_jobs(batch, pool=pool)
-                wall = time.perf_counter() - t0
-                parent = time.process_time() - p_cpu0
-                workers = _pool_cpu(pool.pids) - w_cpu0
-                if len(results) != n or any(r.sim_time_s <= 0 for r in results):
-                    raise RuntimeError(f"the sweep returned {len(results)} results for {n} jobs")
-                if label:  # the first sweep: its figures with the pool's start
-                    figs.update(_figures(results, wall + start_wall, parent + workers + start_cpu, cores, label))
-                else:
-                    figs.update(_figures(results, wall, parent + workers, cores, label))
-                    figs["parent_cpu_s"] = parent
+            w_cpu0, p_cpu0 = _pool_cpu(pool.pids), time.process_time()
+            t0 = time.perf_counter()
+            results = sweep.run_jobs(batch, pool=pool)
+            wall = time.perf_counter() - t0
+            cpu = time.process_time() - p_cpu0 + _pool_cpu(pool.pids) - w_cpu0
+            if len(results) != n or any(r.sim_time_s <= 0 for r in results):
+                raise RuntimeError(f"the sweep returned {len(results)} results for {n} jobs")
+            figs.update(_figures(results, wall + start_wall, cpu + start_cpu, cores, "cold_"))
+
+            ref_rtfs, ref_sim, ref_cpu = _adjacent_reference(sweep, ref_jobs)
+            w_cpu0, p_cpu0 = _pool_cpu(pool.pids), time.process_time()
+            t0 = time.perf_counter()
+            warm, sweeps = [], 0
+            while not sweeps or time.perf_counter() - t0 < MIN_WARM_WALL_S:
+                warm += sweep.run_jobs(batch, pool=pool)
+                sweeps += 1
+            wall = time.perf_counter() - t0
+            parent = time.process_time() - p_cpu0
+            workers = _pool_cpu(pool.pids) - w_cpu0
+            after_rtfs, after_sim, after_cpu = _adjacent_reference(sweep, ref_jobs)
+            figs.update(_figures(warm, wall, parent + workers, cores, ""))
+            figs["parent_cpu_s"] = parent / sweeps
+            figs["warm_sweeps"] = sweeps
+            figs["ref_rtf"] = median(ref_rtfs + after_rtfs)
+            figs["ref_rtf_cpu"] = (ref_sim + after_sim) / (ref_cpu + after_cpu)
+            figs["ref_drift"] = median(after_rtfs) / median(ref_rtfs)
         finally:
             pool.close()
         load.stop()
@@ -310,12 +356,9 @@ def _per_rep(num: ProbeStats, key: str, single: ProbeStats, ref_key: str, scale_
     return [x / (y * c) for x, y, c in zip(a, b, scale)]
 
 
-def _overhead_per_worker(s: ProbeStats, single: ProbeStats) -> list[float]:
-    cpu, parent, n, cores = (s.values(k) for k in ("cpu_s", "parent_cpu_s", "n", "cores"))
-    per_rig = [a + b for a, b in zip(single.values("setup_cpu_s_per_rig"), single.values("run_cpu_s_per_rig"))]
-    if len(per_rig) != len(cpu):
-        raise BenchmarkError(f"cannot pair {s.name!r} ({len(cpu)} runs) with {single.name!r} ({len(per_rig)} runs)")
-    return [(c - p - k * r) / w for c, p, k, r, w in zip(cpu, parent, n, per_rig, cores)]
+def _own(s: ProbeStats, key: str, ref_key: str, scale_key: str | None) -> list[float]:
+    """``key / (ref_key x scale_key)`` within each run of one probe."""
+    return [r[key] / (r[ref_key] * (r[scale_key] if scale_key else 1.0)) for r in s.runs]
 
 
 def _ratio(name: str, values: list[float], reference: str, unit: str = "x", targets=(), note: str = "") -> Metric:
@@ -353,37 +396,43 @@ def many_rigs(stats: dict[str, ProbeStats]) -> list[Metric]:
         label = f"N={s.runs[0].get('n', n)}"
         out += [
             s.metric("rig_s_per_wall_s", f"{label}: aggregate rig-s per wall s (warm pool)", "rig-s/s"),
-            _ratio(f"{label}: parallel efficiency (warm pool)",
-                   _per_rep(s, "rig_s_per_wall_s", single, "rtf", "cores"), SINGLE_PROBE, targets=(EFFICIENCY_TARGET,),
-                   note="aggregate rig-s per wall s / (single-rig real-time factor x cores), paired by repetition; "
-                        "a sweep on run_jobs' started pool (every sweep of a session after its first)"),
+            s.metric("ref_rtf", f"{label}: single rig's real-time factor next to the sweep", "x real time",
+                     note="the same runs one after another in the sweep's process, just before and after the warm "
+                          "sweeps: the reference of the efficiencies below"),
+            _ratio(f"{label}: parallel efficiency (warm pool)", _own(s, "rig_s_per_wall_s", "ref_rtf", "cores"),
+                   probe_name(n), targets=(EFFICIENCY_TARGET,),
+                   note="aggregate rig-s per wall s / (single-rig real-time factor next to the sweep x cores); "
+                        "sweeps on run_jobs' started pool (every sweep of a session after its first)"),
+            _ratio(f"{label}: parallel efficiency (warm) vs the sweep-single probe",
+                   _per_rep(s, "rig_s_per_wall_s", single, "rtf", "cores"), SINGLE_PROBE,
+                   note="the same against the single-rig probe's figure, measured in another process at another "
+                        "time, paired by repetition: it also carries the machine's speed changing in between"),
             _ratio(f"{label}: parallel efficiency (cold, pool start included)",
-                   _per_rep(s, "cold_rig_s_per_wall_s", single, "rtf", "cores"), SINGLE_PROBE,
+                   _own(s, "cold_rig_s_per_wall_s", "ref_rtf", "cores"), probe_name(n),
                    note="the first sweep of a fresh process: the workers' start (spawn, imports, numba cache "
                         "load) counted in the sweep's wall time"),
             s.metric("pool_start_s", f"{label}: pool start (workers spawned and warm)", "s"),
-            _ratio(f"{label}: CPU efficiency", _per_rep(s, "rig_s_per_cpu_s", single, "rtf_cpu", None), SINGLE_PROBE,
-                   note="rig-s per CPU-s of the sweep (caller + workers) / single rig's per CPU-s of its run: the "
-                        "share of the sweep's CPU time that simulates; independent of other load"),
-            _ratio(f"{label}: CPU efficiency vs serial end to end",
-                   _per_rep(s, "rig_s_per_cpu_s", single, "serial_rig_s_per_cpu_s", None), SINGLE_PROBE,
-                   note="the same against the serial runs with their set-up: what the pool itself costs"),
-            _ratio(f"{label}: CPU beyond the runs, per worker", _overhead_per_worker(s, single), SINGLE_PROBE, "s",
-                   note="(sweep CPU - caller CPU - N x the single rig's set-up + run CPU) / workers: each worker's "
-                        "start (interpreter, imports, numba cache load) and the pool's traffic"),
+            _ratio(f"{label}: CPU efficiency (warm)", _own(s, "rig_s_per_cpu_s", "ref_rtf_cpu", None), probe_name(n),
+                   note="rig-s per CPU-s of the warm sweeps (caller + workers) / the reference runs' rig-s per CPU-s: "
+                        "the share of the sweep's CPU time that simulates; independent of other load"),
+            s.metric("ref_drift", f"{label}: reference after / before the warm sweeps", "x",
+                     note="how much the machine's speed changed while the sweeps ran (1: not at all)"),
             s.metric("cores_used", f"{label}: cores the sweep kept busy", "cores",
                      note="CPU s of caller + workers / wall s: below the core count when other work shares them"),
-            s.metric("wall_s", f"{label}: sweep wall time", "s"),
-            s.metric("parent_cpu_s", f"{label}: CPU time of the calling process", "s",
-                     note="job validation, pool, result collection"),
-            s.metric("machine_busy_cores", f"{label}: machine load during the sweep (all processes)", "cores"),
+            s.metric("wall_s", f"{label}: warm sweeps' wall time", "s"),
+            s.metric("warm_sweeps", f"{label}: warm sweeps timed", "sweeps",
+                     note=f"repeated until {MIN_WARM_WALL_S:g} s had passed"),
+            s.metric("parent_cpu_s", f"{label}: CPU time of the calling process per sweep", "s",
+                     note="job checks, batching, result collection"),
+            s.metric("machine_busy_cores", f"{label}: machine load during the probe (all processes)", "cores"),
         ]
         if dask:
             out += [
                 s.metric("dask_rig_s_per_wall_s", f"{label} on Dask: aggregate rig-s per wall s", "rig-s/s",
                          note=f"scheduler {s.runs[0].get('dask_scheduler')}"),
                 _ratio(f"{label} on Dask: parallel efficiency",
-                       _per_rep(s, "dask_rig_s_per_wall_s", single, "rtf", "dask_cores"), SINGLE_PROBE,
-                       targets=(EFFICIENCY_TARGET,), note="against the cluster's total threads"),
+                       _own(s, "dask_rig_s_per_wall_s", "ref_rtf", "dask_cores"), probe_name(n),
+                       targets=(EFFICIENCY_TARGET,), note="against the cluster's total threads (cold: a sweep "
+                                                          "whose jobs the cluster's workers meet for the first time)"),
             ]
     return out

@@ -304,7 +304,7 @@ class SweepPool:
             self._lock.release()
 
     def _batch_size(self, remaining: int, job: SimJob) -> int:
-        guided = math.ceil(remaining / (4 * self.workers))
+        guided = math.ceil(remaining / (2 * self.workers))
         cap = max(1, int(BATCH_RIG_SECONDS // job.duration)) if job.duration else 1
         return max(1, min(guided, cap))
 

@@ -32,14 +32,21 @@ def test_probes_and_summary(monkeypatch):
               "setup_cpu_s_per_rig_calibrating", "run_cpu_s_per_rig"):
         assert math.isfinite(single[k]) and single[k] > 0, k
     sweep = many_rigs.sweep_probe(n=3, duration=0.5)
-    assert sweep["n"] == 3 and sweep["rig_s"] == pytest.approx(1.5) and sweep["dask_rig_s"] == pytest.approx(1.5)
-    for k in ("rig_s_per_wall_s", "rig_s_per_cpu_s", "cores_used", "dask_rig_s_per_wall_s"):
+    assert sweep["n"] == 3 and sweep["cold_rig_s"] == pytest.approx(1.5) and sweep["dask_rig_s"] == pytest.approx(1.5)
+    assert sweep["warm_sweeps"] >= 1 and sweep["rig_s"] == pytest.approx(1.5 * sweep["warm_sweeps"])
+    for k in ("rig_s_per_wall_s", "rig_s_per_cpu_s", "cores_used", "dask_rig_s_per_wall_s", "ref_rtf", "ref_rtf_cpu",
+              "cold_rig_s_per_wall_s", "pool_start_s", "ref_drift"):
         assert math.isfinite(sweep[k]) and sweep[k] > 0, k
     stats = {many_rigs.SINGLE_PROBE: ProbeStats(many_rigs.SINGLE_PROBE, [single])}
     for n in many_rigs.SIZES:
         stats[many_rigs.probe_name(n)] = ProbeStats(many_rigs.probe_name(n), [sweep])
     metrics = {m.name: m for m in many_rigs.many_rigs(stats)}
-    eff = metrics["N=3: parallel efficiency"]
-    assert eff.value == pytest.approx(sweep["rig_s_per_wall_s"] / (single["rtf"] * sweep["cores"]))
-    assert eff.targets[0].value == 0.8 and eff.reference == many_rigs.SINGLE_PROBE
+    eff = metrics["N=3: parallel efficiency (warm pool)"]
+    assert eff.value == pytest.approx(sweep["rig_s_per_wall_s"] / (sweep["ref_rtf"] * sweep["cores"]))
+    assert eff.targets[0].value == 0.8 and eff.reference.startswith("sweep-n")
+    paired = metrics["N=3: parallel efficiency (warm) vs the sweep-single probe"]
+    assert paired.value == pytest.approx(sweep["rig_s_per_wall_s"] / (single["rtf"] * sweep["cores"]))
+    cold = metrics["N=3: parallel efficiency (cold, pool start included)"]
+    assert cold.value == pytest.approx(sweep["cold_rig_s_per_wall_s"] / (sweep["ref_rtf"] * sweep["cores"]))
+    assert cold.value < eff.value  # the pool's start is in the cold sweep's wall time
     assert "N=3 on Dask: parallel efficiency" in metrics

@@ -96,3 +96,45 @@ def test_bad_jobs_fail_before_anything_runs():
     with pytest.raises(ValueError, match="workers"):
         run_jobs(jobs[:1], workers=0)
     assert run_jobs([], workers=2) == []
+
+
+def test_run_jobs_keeps_its_warm_pool_between_calls_and_replaces_a_broken_one():
+    import os
+    import signal
+
+    from rig_emulator import sweep
+
+    jobs = [SimJob("hover", "pid", seed=1, duration=0.2, columns=(), label=str(k)) for k in range(4)]
+    first = run_jobs(jobs, workers=2)
+    pool = sweep._shared
+    assert pool is not None and pool.workers == 2 and len(pool.pids) == 2
+    again = run_jobs(jobs, workers=2)
+    assert sweep._shared is pool and pool.pids == sweep._shared.pids  # the same warm workers
+    assert [r.digest() for r in first] == [r.digest() for r in again]
+    os.kill(pool.pids[0], signal.SIGKILL)  # a worker dies (out of memory, killed, ...)
+    with pytest.raises(sweep.JobFailed, match="worker process died"):
+        run_jobs(jobs, workers=2)
+    assert pool.broken
+    after = run_jobs(jobs, workers=2)  # a new pool
+    assert sweep._shared is not pool and [r.digest() for r in after] == [r.digest() for r in first]
+    sweep.shutdown_pool()
+    assert sweep._shared is None
+
+
+def test_a_pool_of_ones_own_and_guided_batches():
+    from rig_emulator.sweep import SweepPool
+
+    jobs = [SimJob("hover", "pid", seed=2, duration=0.1, columns=(), label=str(k)) for k in range(9)]
+    seen = []
+    with SweepPool(2) as pool:
+        out = run_jobs(jobs, pool=pool, progress=lambda done, total, job: seen.append((done, total)))
+        assert [r.job.label for r in out] == [j.label for j in jobs]
+        assert seen == [(k, 9) for k in range(1, 10)]
+        sizes = []
+        left = 9
+        while left:
+            sizes.append(pool._batch_size(left, jobs[0]))
+            left -= sizes[-1]
+        assert sizes[-1] == 1 and sizes == sorted(sizes, reverse=True)  # shrinking to single jobs
+    with pytest.raises(ValueError, match="workers 0"):
+        SweepPool(0)
