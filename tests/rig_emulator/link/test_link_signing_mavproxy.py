@@ -34,7 +34,7 @@ def test_mavproxy_signing_setup_then_params(tmp_path):
         try:
             # unsigned, MAVProxy sees the rig (its telemetry is signed, MAVProxy does not check it) but
             # its parameter requests are dropped
-            assert out.wait_for(r"signing: rejected \d+ unsigned", timeout=30) is not None, "".join(out.all)
+            assert out.wait_for(r"signing: rejected \d+ unsigned", timeout=60) is not None, "".join(out.all)
             assert not any(re.search(r"Received \d+ parameters", line) for line in out.all)
             send(f"signing setup {PASSPHRASE}")
             assert out.wait_for(r"Setup signing key") is not None, "".join(out.all)
