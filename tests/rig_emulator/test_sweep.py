@@ -98,9 +98,19 @@ def test_bad_jobs_fail_before_anything_runs():
     assert run_jobs([], workers=2) == []
 
 
+def _die_on_label_x(job, sim):  # a reduction that kills its worker (module level: picklable)
+    import os
+    import signal
+
+    if job.label == "x":
+        os.kill(os.getpid(), signal.SIGKILL)
+    return job.label
+
+
 def test_run_jobs_keeps_its_warm_pool_between_calls_and_replaces_a_broken_one():
     import os
     import signal
+    import time
 
     from rig_emulator import sweep
 
@@ -111,12 +121,22 @@ def test_run_jobs_keeps_its_warm_pool_between_calls_and_replaces_a_broken_one():
     again = run_jobs(jobs, workers=2)
     assert sweep._shared is pool and pool.pids == sweep._shared.pids  # the same warm workers
     assert [r.digest() for r in first] == [r.digest() for r in again]
-    os.kill(pool.pids[0], signal.SIGKILL)  # a worker dies (out of memory, killed, ...)
+    # a worker dies while it runs a job (killed, out of memory, ...): the sweep fails naming it
+    doomed = jobs[:2] + [SimJob("hover", "pid", seed=1, duration=0.2, columns=(), label="x")]
     with pytest.raises(sweep.JobFailed, match="worker process died"):
-        run_jobs(jobs, workers=2)
+        run_jobs(doomed, workers=2, reduce=_die_on_label_x)
     assert pool.broken
     after = run_jobs(jobs, workers=2)  # a new pool
     assert sweep._shared is not pool and [r.digest() for r in after] == [r.digest() for r in first]
+    # a worker that dies between sweeps: the next call notices and starts a new pool
+    idle = sweep._shared
+    os.kill(idle.pids[0], signal.SIGKILL)
+    deadline = time.monotonic() + 20
+    while not idle.broken and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert idle.broken
+    assert [r.digest() for r in run_jobs(jobs, workers=2)] == [r.digest() for r in first]
+    assert sweep._shared is not idle
     sweep.shutdown_pool()
     assert sweep._shared is None
 
