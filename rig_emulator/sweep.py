@@ -23,7 +23,8 @@ Where the runs go:
   the simulation and load its compiled step loop once, when they start. The shared pool is
   **kept warm between calls** (a second sweep pays no interpreter start, imports or numba
   cache load; the first call pays them, about 1-3 s a worker) and is shut down at exit, by
-  :func:`shutdown_pool`, or when a call asks for another worker count. ``with SweepPool(n) as
+  :func:`shutdown_pool`, or when a call asks for another worker count (a call made while
+  another thread's sweep runs on it gets a pool of its own for that call). ``with SweepPool(n) as
   pool: run_jobs(jobs, pool=pool)`` gives a pool of its own with a lifetime of its own;
 * ``workers=1`` (or a single job): serially in the calling process, no pool.
 
@@ -233,7 +234,12 @@ def _mp_context():
 
 def _warm_worker() -> None:
     """A pool worker's start: import the simulation and load (or compile) its step loop by
-    running one physics step, so the first job does not pay it."""
+    running one physics step, so the first job does not pay it. A worker ignores SIGINT: Ctrl-C
+    in a terminal reaches the whole process group, and it is the caller's to act on (it stops
+    the sweep; the workers finish the batches they hold and stay warm)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     from rig_emulator.config.loader import load_config
     from rig_emulator.simulation.run import Simulation
 
@@ -352,24 +358,36 @@ _shared: SweepPool | None = None
 _shared_lock = threading.Lock()
 
 
-def _shared_pool(workers: int) -> SweepPool:
+def _run_shared(jobs: list, workers: int, progress, reduce) -> list:
+    """Run on the shared pool; when another thread's sweep holds it, on a pool of this call's
+    own (as before pools were kept), never closing a pool that is running a sweep."""
     global _shared
     with _shared_lock:
-        if _shared is not None and (_shared.workers != workers or _shared.broken):
-            _shared.close()
-            _shared = None
-        if _shared is None:
-            _shared = SweepPool(workers)
-        return _shared
+        pool = _shared
+        if pool is not None and (pool.workers != workers or pool.broken) and not pool._lock.locked():
+            pool.close()
+            pool = _shared = None
+        if pool is None:
+            pool = _shared = SweepPool(workers)
+        claimed = pool.workers == workers and not pool.broken and pool._lock.acquire(blocking=False)
+    if not claimed:
+        with SweepPool(workers) as own:
+            return own.run(jobs, progress, reduce)
+    try:
+        return pool._run(jobs, progress, reduce)
+    finally:
+        pool._lock.release()
 
 
 def shutdown_pool() -> None:
-    """Stop the shared worker processes of :func:`run_jobs` (the next pooled call starts new ones)."""
+    """Stop the shared worker processes of :func:`run_jobs` (the next pooled call starts new
+    ones); a sweep running on them in another thread finishes first."""
     global _shared
     with _shared_lock:
-        if _shared is not None:
-            _shared.close()
-            _shared = None
+        pool, _shared = _shared, None
+    if pool is not None:
+        with pool._lock:  # waits for a sweep running on it
+            pool.close()
 
 
 atexit.register(shutdown_pool)
@@ -406,7 +424,7 @@ def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: A
             if progress is not None:
                 progress(k + 1, len(jobs), job)
         return out
-    return _shared_pool(n).run(jobs, progress, reduce)
+    return _run_shared(jobs, n, progress, reduce)
 
 
 def _run_dask(jobs, scheduler, progress, reduce) -> list:

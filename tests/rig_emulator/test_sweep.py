@@ -158,3 +158,27 @@ def test_a_pool_of_ones_own_and_guided_batches():
         assert sizes[-1] == 1 and sizes == sorted(sizes, reverse=True)  # shrinking to single jobs
     with pytest.raises(ValueError, match="workers 0"):
         SweepPool(0)
+
+
+def test_sweeps_from_two_threads_at_once_both_complete():
+    import threading
+
+    from rig_emulator import sweep
+
+    jobs = [SimJob("hover", "pid", seed=3, duration=0.5, columns=(), label=str(k)) for k in range(6)]
+    expected = [r.digest() for r in run_jobs(jobs, workers=1)]
+    got, errors = {}, []
+
+    def go(name):
+        try:
+            got[name] = [r.digest() for r in run_jobs(jobs, workers=2)]
+        except Exception as exc:  # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=go, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(120)
+    assert not errors and got == {0: expected, 1: expected}
+    sweep.shutdown_pool()
