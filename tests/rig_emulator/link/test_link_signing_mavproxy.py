@@ -7,6 +7,7 @@ import hashlib
 import re
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -43,11 +44,13 @@ def test_mavproxy_signing_setup_then_params(tmp_path):
             assert got is not None and int(got.group(1)) == len(ParamTable()), "".join(out.all)
             send("param set SMC_K_PHI 2.25")
             shown = None
-            for _ in range(10):  # MAVProxy shows its cache: ask until the rig's echo has updated it
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline:  # MAVProxy shows its cache: ask until the rig's echo updated it
                 send("param show SMC_K_PHI")
                 shown = out.wait_for(r"SMC_K_PHI\s+(\S+)", timeout=10)
                 if shown is None or float(shown.group(1)) == 2.25:
                     break
+                time.sleep(0.5)  # the echo follows the rig's durable write (fsync), slower on a busy machine
             assert shown is not None and float(shown.group(1)) == 2.25, "".join(out.all)
             before_exit = "".join(out.all)
             send("exit")
