@@ -64,6 +64,9 @@ def cmd_reproduce(args) -> int:
     t0, c0 = time.perf_counter(), _cpu_s()
     outcome = reproduce(args.output, seed=args.seed, workers=args.workers, scheduler=args.scheduler, only=only,
                         quick=args.quick, show_progress=not args.no_progress)
+    from rig_emulator.sweep import shutdown_pool
+
+    shutdown_pool()  # the sweep's warm workers end here, so their CPU time counts among the children's
     wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
     for s in outcome.sections:
         for v in s.verdicts:
