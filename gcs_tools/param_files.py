@@ -21,13 +21,13 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from gcs_tools.errors import UsageError
 from protocol.atomic_file import atomic_write_text
 from protocol.dialect import mavlink as M
+from protocol.text_file import read_text
 
 NAME_RE = re.compile(r"^[A-Za-z0-9_]{1,16}$")
 REAL32, REAL64 = M.MAV_PARAM_TYPE_REAL32, M.MAV_PARAM_TYPE_REAL64
@@ -147,17 +147,7 @@ def parse_params(text: str, source: str = "<params>") -> list[ParamLine]:
 
 
 def load_params(path) -> list[ParamLine]:
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise ParamFileError(str(path), None, f"cannot read: {exc.strerror}") from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ParamFileError(str(path), data[: exc.start].count(b"\n") + 1, "not UTF-8 text") from None
-    if "\x00" in text:
-        raise ParamFileError(str(path), text[: text.index("\x00")].count("\n") + 1, "NUL byte: not a text file")
-    return parse_params(text, str(path))
+    return parse_params(read_text(path, ParamFileError), str(path))
 
 
 def value_text(value: float, ptype: int | None) -> str:

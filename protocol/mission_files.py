@@ -39,6 +39,7 @@ import numpy as np
 
 from protocol.atomic_file import atomic_write_text
 from protocol.dialect import mavlink as M
+from protocol.text_file import read_text
 
 WPL_HEADER = "QGC WPL 110"
 WPL_SUFFIXES = (".waypoints", ".txt")
@@ -470,15 +471,7 @@ def file_format(path) -> str:
 def load_mission(path) -> Mission:
     """Read a .plan or WPL file (chosen by suffix)."""
     kind = file_format(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise MissionFileError(str(path), None, f"cannot read: {exc.strerror}") from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data[: exc.start].count(b"\n") + 1
-        raise MissionFileError(str(path), line, "not UTF-8 text") from None
+    text = read_text(path, MissionFileError)
     return parse_plan(text, str(path)) if kind == "plan" else parse_wpl(text, str(path))
 
 

@@ -14,59 +14,53 @@ CONTROL = M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL | M.MAV_SYS_STATUS_SENSOR
 
 
 @pytest.fixture
-def fast_rig():
+def rig():
+    """The link conftest's rig at 8x (its ``client`` fixture connects to this one)."""
     with RigThread(speedup=8.0) as r:
         yield r
 
 
-@pytest.fixture
-def conn(fast_rig):
-    c = connect(fast_rig.tcp_url)
-    yield c
-    c.close()
-
-
-def _texts_for(conn, wall_s: float) -> list[str]:
+def _texts_for(client, wall_s: float) -> list[str]:
     """Every STATUSTEXT (chunks joined) received during ``wall_s`` seconds."""
     out, deadline = [], time.monotonic() + wall_s
     while time.monotonic() < deadline:
-        got = recv_text(conn, timeout=max(deadline - time.monotonic(), 0.01))
+        got = recv_text(client, timeout=max(deadline - time.monotonic(), 0.01))
         if got is not None:
             out.append(got[1])
     return out
 
 
-def _text(conn, condition):
-    got = recv_text(conn, condition)
+def _text(client, condition):
+    got = recv_text(client, condition)
     assert got is not None, "STATUSTEXT not received"
     return got
 
 
-def _sys_status(conn, condition):
-    return recv(conn, "SYS_STATUS", condition=lambda m: condition(m.onboard_control_sensors_health))
+def _sys_status(client, condition):
+    return recv(client, "SYS_STATUS", condition=lambda m: condition(m.onboard_control_sensors_health))
 
 
-def test_imu_fault_by_command_is_reported_once_and_in_the_health_bits(conn):
-    assert _sys_status(conn, lambda h: h & M.MAV_SYS_STATUS_PREARM_CHECK) is not None  # all healthy first
-    assert command(conn, FAULT, IMU, 1, M.HILMS_FAULT_DEAD).result == ACCEPTED
-    severity, _ = _text(conn, lambda t: t == "IMU module 1: dead injected")
+def test_imu_fault_by_command_is_reported_once_and_in_the_health_bits(client):
+    assert _sys_status(client, lambda h: h & M.MAV_SYS_STATUS_PREARM_CHECK) is not None  # all healthy first
+    assert command(client, FAULT, IMU, 1, M.HILMS_FAULT_DEAD).result == ACCEPTED
+    severity, _ = _text(client, lambda t: t == "IMU module 1: dead injected")
     assert severity == M.MAV_SEVERITY_WARNING
-    _, detected = _text(conn, lambda t: t.startswith("ensemble rejects IMU module 1"))
+    _, detected = _text(client, lambda t: t.startswith("ensemble rejects IMU module 1"))
     assert "accel" in detected
     # the module array lost a module (ACCEL2 red), the fused estimate the rig flies on is fine (ACCEL green)
-    st = _sys_status(conn, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_3D_ACCEL2)
+    st = _sys_status(client, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_3D_ACCEL2)
     h = st.onboard_control_sensors_health
     assert h & M.MAV_SYS_STATUS_SENSOR_3D_ACCEL and h & M.MAV_SYS_STATUS_AHRS
     assert not h & M.MAV_SYS_STATUS_PREARM_CHECK
-    later = _texts_for(conn, 0.6)  # about 5 s of simulated time: no repeats
+    later = _texts_for(client, 0.6)  # about 5 s of simulated time: no repeats
     assert not any("IMU module 1" in t for t in later), later
-    assert command(conn, FAULT, IMU, 1, M.HILMS_FAULT_NONE).result == ACCEPTED
-    assert _text(conn, lambda t: t == "IMU module 1: fault cleared") is not None
-    assert _text(conn, lambda t: t == "ensemble accepts IMU module 1 again") is not None
-    assert _sys_status(conn, lambda h: h & M.MAV_SYS_STATUS_PREARM_CHECK) is not None
+    assert command(client, FAULT, IMU, 1, M.HILMS_FAULT_NONE).result == ACCEPTED
+    assert _text(client, lambda t: t == "IMU module 1: fault cleared") is not None
+    assert _text(client, lambda t: t == "ensemble accepts IMU module 1 again") is not None
+    assert _sys_status(client, lambda h: h & M.MAV_SYS_STATUS_PREARM_CHECK) is not None
 
 
-def test_bad_fault_arguments_are_denied_with_a_reason(conn):
+def test_bad_fault_arguments_are_denied_with_a_reason(client):
     bad = [
         ((IMU, 5, M.HILMS_FAULT_DEAD), "IMU module 5: must be 0..4"),
         ((CELL, 0, M.HILMS_FAULT_DEAD), "load cell 0: must be 1..4"),
@@ -80,49 +74,49 @@ def test_bad_fault_arguments_are_denied_with_a_reason(conn):
         ((IMU, 1.5, M.HILMS_FAULT_DEAD), "must be whole numbers"),
     ]
     for params, reason in bad:
-        ack = command(conn, FAULT, *params)
+        ack = command(client, FAULT, *params)
         assert ack.result == DENIED, params
-        _, text = _text(conn, lambda t: t.startswith("fault rejected"))
+        _, text = _text(client, lambda t: t.startswith("fault rejected"))
         assert reason in text, (params, text)
-    assert command(conn, FAULT, MOTOR, 4, M.HILMS_FAULT_THRUST_LOSS, 0.25).result == ACCEPTED
-    assert _text(conn, lambda t: t == "motor 4: thrust_loss 25 % injected") is not None
-    assert recv(conn, "ATTITUDE") is not None  # the rig kept running
+    assert command(client, FAULT, MOTOR, 4, M.HILMS_FAULT_THRUST_LOSS, 0.25).result == ACCEPTED
+    assert _text(client, lambda t: t == "motor 4: thrust_loss 25 % injected") is not None
+    assert recv(client, "ATTITUDE") is not None  # the rig kept running
 
 
-def test_motor_thrust_loss_then_the_loss_of_control_failsafe(fast_rig, conn):
-    assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED
-    assert command(conn, FAULT, MOTOR, 2, M.HILMS_FAULT_THRUST_LOSS, 0.5).result == ACCEPTED
-    assert _text(conn, lambda t: t == "motor 2: thrust_loss 50 % injected") is not None
-    assert _sys_status(conn, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS) is not None
+def test_motor_thrust_loss_then_the_loss_of_control_failsafe(rig, client):
+    assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED
+    assert command(client, FAULT, MOTOR, 2, M.HILMS_FAULT_THRUST_LOSS, 0.5).result == ACCEPTED
+    assert _text(client, lambda t: t == "motor 2: thrust_loss 50 % injected") is not None
+    assert _sys_status(client, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS) is not None
     # the paper's SMC cannot hold 50 % on one motor (docs/FAULTS.md): loss of control, motors stopped
-    severity, lost = _text(conn, lambda t: t.startswith("loss of control"))
+    severity, lost = _text(client, lambda t: t.startswith("loss of control"))
     assert severity == M.MAV_SEVERITY_CRITICAL and "disarmed" in lost
-    hb = recv(conn, "HEARTBEAT", condition=lambda m: m.system_status == M.MAV_STATE_EMERGENCY)
+    hb = recv(client, "HEARTBEAT", condition=lambda m: m.system_status == M.MAV_STATE_EMERGENCY)
     assert not hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED
-    snap = fast_rig.server.rig.snapshot()
+    snap = rig.server.rig.snapshot()
     assert not snap.armed and snap.faults.failsafe and max(snap.voltage_commands) == 0.0
-    assert _sys_status(conn, lambda h: not h & CONTROL) is not None
-    later = _texts_for(conn, 0.6)
+    assert _sys_status(client, lambda h: not h & CONTROL) is not None
+    later = _texts_for(client, 0.6)
     assert not any(t.startswith("loss of control") for t in later), later  # once
-    assert command(conn, FAULT, MOTOR, 2, M.HILMS_FAULT_NONE).result == ACCEPTED
-    assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED  # arming clears the latch
-    assert _text(conn, lambda t: t == "failsafe cleared (armed again)") is not None
-    hb = recv(conn, "HEARTBEAT", condition=lambda m: m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
+    assert command(client, FAULT, MOTOR, 2, M.HILMS_FAULT_NONE).result == ACCEPTED
+    assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED  # arming clears the latch
+    assert _text(client, lambda t: t == "failsafe cleared (armed again)") is not None
+    hb = recv(client, "HEARTBEAT", condition=lambda m: m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
     assert hb.system_status != M.MAV_STATE_EMERGENCY
 
 
 def test_config_fault_is_announced_at_its_time():
     events = [{"t": 10.0, "sensor": "load_cell", "index": 2, "mode": "dead", "magnitude": 0.0}]
     with RigThread(speedup=8.0, overrides={"faults.events": events}) as rig:
-        conn = connect(rig.tcp_url)
+        client = connect(rig.tcp_url)
         try:
-            _text(conn, lambda t: t == "load cell 2: dead injected")
-            assert _text(conn, lambda t: t == "load cell 2: readings rejected by the guards")
-            cells = recv(conn, "HILMS_LOAD_CELLS", condition=lambda m: m.health == 0b1101)
+            _text(client, lambda t: t == "load cell 2: dead injected")
+            assert _text(client, lambda t: t == "load cell 2: readings rejected by the guards")
+            cells = recv(client, "HILMS_LOAD_CELLS", condition=lambda m: m.health == 0b1101)
             assert cells is not None and cells.time_usec >= 10_000_000
-            assert _sys_status(conn, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_GPS) is not None
+            assert _sys_status(client, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_GPS) is not None
         finally:
-            conn.close()
+            client.close()
 
 
 def test_fault_codes_are_the_dialects():
