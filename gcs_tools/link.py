@@ -151,19 +151,19 @@ class Link:
         (``confirmation`` 0): a vehicle answers a retry of a command it already acted on with
         the earlier ACK alone, without sending the message again.
         """
-        refusals = (M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED, M.MAV_RESULT_FAILED,
-                    M.MAV_RESULT_TEMPORARILY_REJECTED)
+        cmd = M.MAV_CMD_GET_HOME_POSITION
+
+        def answer():  # HOME_POSITION, or this command's ACK
+            return self.recv(["HOME_POSITION", "COMMAND_ACK"], timeout,
+                             lambda m: m.get_type() == "HOME_POSITION" or m.command == cmd)
+
         for _ in range(attempts):
-            self.mav.command_long_send(self.target_system, self.target_component, M.MAV_CMD_GET_HOME_POSITION,
-                                       0, *([NAN] * 7))
-            msg = self.recv(["HOME_POSITION", "COMMAND_ACK"], timeout,
-                            lambda m: m.get_type() == "HOME_POSITION" or m.command == M.MAV_CMD_GET_HOME_POSITION)
+            self.mav.command_long_send(self.target_system, self.target_component, cmd, 0, *([NAN] * 7))
+            msg = answer()
             while msg is not None and msg.get_type() == "COMMAND_ACK":
-                if msg.result in refusals:
-                    return None
-                # accepted: the message follows the ACK
-                msg = self.recv(["HOME_POSITION", "COMMAND_ACK"], timeout,
-                                lambda m: m.get_type() == "HOME_POSITION" or m.command == M.MAV_CMD_GET_HOME_POSITION)
+                if msg.result not in (M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_IN_PROGRESS):
+                    return None  # refused: the vehicle has no home to send
+                msg = answer()  # accepted: the message follows the ACK
             if msg is not None:
                 return msg
         raise OperationError(f"no HOME_POSITION from the vehicle after {attempts} MAV_CMD_GET_HOME_POSITION requests")

@@ -14,12 +14,14 @@ classes and dataclasses (no copy or pickling hooks, no slots), which are copied 
 from __future__ import annotations
 
 import copy
+import functools
 
 import numpy as np
 
 _ATOMIC = (type(None), bool, int, float, complex, str, bytes, np.dtype)
 
 
+@functools.lru_cache(maxsize=None)
 def _plain_object(t: type) -> bool:
     """An instance of ``t`` is copied by ``copy.deepcopy`` as class + ``__dict__`` (a plain class
     or dataclass: no copy hooks, no slots, default pickling)."""

@@ -158,11 +158,7 @@ class SimJob:
 
     def config(self) -> RigConfig:
         """The validated configuration this job runs (ConfigError naming the job otherwise)."""
-        flat = {k: copy.deepcopy(v) for k, v in self.overrides}
-        flat["control.strategy"] = self.strategy
-        flat["sim.seed"] = self.seed
-        if self.duration is not None:
-            flat["sim.duration"] = self.duration
+        flat = {k: copy.deepcopy(v) for k, v in self._flat_overrides().items()}
         try:
             return load_config(airframe=self.airframe, scenario=self.scenario, overrides=flat)
         except ConfigError as exc:

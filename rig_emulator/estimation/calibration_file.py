@@ -9,7 +9,6 @@ it is not a valid calibration.
 
 from __future__ import annotations
 
-import copy
 import json
 import os
 from pathlib import Path
@@ -18,6 +17,7 @@ import numpy as np
 
 from protocol.atomic_file import atomic_path
 
+from rig_emulator.build_cache import BuildCache
 from rig_emulator.estimation.imu_calibration import ImuCalibration
 from rig_emulator.estimation.load_cell_calibration import LoadCellCalibration
 
@@ -64,8 +64,7 @@ def _array(doc: dict, key: str, shape_len: int, path: Path) -> np.ndarray:
     return arr
 
 
-_READ: dict = {}  # (path, inode, size, mtime) -> calibration read from it, never handed out itself
-_READ_MAX = 32
+_READ = BuildCache(32)  # (path, inode, size, mtime) -> calibration read from it
 
 
 def load_calibration(path: str | os.PathLike) -> ImuCalibration | LoadCellCalibration:
@@ -81,13 +80,7 @@ def load_calibration(path: str | os.PathLike) -> ImuCalibration | LoadCellCalibr
     except OSError:
         return _read_calibration(path)  # reports the error
     key = (str(path.resolve()), st.st_ino, st.st_size, st.st_mtime_ns)
-    hit = _READ.get(key)
-    if hit is None:
-        hit = _read_calibration(path)
-        if len(_READ) >= _READ_MAX:
-            _READ.clear()
-        _READ[key] = hit
-    return copy.deepcopy(hit)
+    return _READ.get_or_build(key, lambda: _read_calibration(path))
 
 
 def _read_calibration(path: Path) -> ImuCalibration | LoadCellCalibration:

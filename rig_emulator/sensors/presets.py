@@ -17,7 +17,7 @@ import tomllib
 from importlib import resources
 from typing import Any, Mapping
 
-from rig_emulator.fast_copy import fast_deepcopy
+from rig_emulator.build_cache import BuildCache
 
 
 class _Num:
@@ -198,19 +198,10 @@ def load_sensor_preset(name: str, overrides: Mapping | None = None) -> dict:
     data); every call returns its own copy.
     """
     key = _overrides_key(overrides)
-    if key is None:  # not JSON-representable: validated uncached (and refused by a spec)
-        return _load_sensor_preset(name, overrides)
-    hit = _RESULTS.get((name, key))
-    if hit is None:
-        hit = _load_sensor_preset(name, overrides)  # raises on bad input: nothing is cached
-        if len(_RESULTS) >= _RESULTS_MAX:
-            _RESULTS.clear()
-        _RESULTS[(name, key)] = hit
-    return fast_deepcopy(hit)
+    return _RESULTS.get_or_build(None if key is None else (name, key), lambda: _load_sensor_preset(name, overrides))
 
 
-_RESULTS: dict = {}  # (name, canonical overrides) -> validated tree, never handed out itself
-_RESULTS_MAX = 256
+_RESULTS = BuildCache(256)  # (name, canonical overrides) -> validated tree
 
 
 def _overrides_key(overrides: Mapping | None) -> str | None:
@@ -224,9 +215,13 @@ def _overrides_key(overrides: Mapping | None) -> str | None:
         return None
 
 
+def _preset_path(name: str):
+    return resources.files("rig_emulator") / "presets" / "sensors" / f"{name}.toml"
+
+
 @functools.lru_cache(maxsize=None)
 def _preset_file(name: str) -> dict:
-    path = resources.files("rig_emulator") / "presets" / "sensors" / f"{name}.toml"
+    path = _preset_path(name)
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
@@ -236,7 +231,7 @@ def _preset_file(name: str) -> dict:
 def _load_sensor_preset(name: str, overrides: Mapping | None) -> dict:
     if name not in SPECS:
         raise ValueError(f"unknown sensor preset {name!r}: choose one of {', '.join(sorted(SPECS))}")
-    path = resources.files("rig_emulator") / "presets" / "sensors" / f"{name}.toml"
+    path = _preset_path(name)
     tree = copy.deepcopy(_preset_file(name))
     if overrides:
         for key, value in _flatten(overrides).items():

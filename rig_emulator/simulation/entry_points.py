@@ -47,7 +47,7 @@ def entry_point(dispatcher, args: tuple):
         hit = _ENTRIES.get((id(dispatcher), key))
         if hit is not None:
             return hit
-    sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+    sig = signature(dispatcher, args)
     if sig not in dispatcher.overloads:
         dispatcher.compile(sig)
     entry = dispatcher.overloads[sig].entry_point
@@ -57,5 +57,5 @@ def entry_point(dispatcher, args: tuple):
 
 
 def signature(dispatcher, args: tuple) -> tuple:
-    """numba's own types of ``args`` (what the key stands for; used by the tests)."""
+    """numba's own types of ``args`` (what the key stands for)."""
     return tuple(dispatcher.typeof_pyval(a) for a in args)

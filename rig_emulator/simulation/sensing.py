@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import json
 import os
-from collections import OrderedDict, namedtuple
+from collections import namedtuple
 from pathlib import Path
 
 import numpy as np
 
+from rig_emulator.build_cache import BuildCache
 from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.fast_copy import fast_deepcopy
 from rig_emulator.estimation.attitude_pipeline import make_attitude_chain
@@ -41,8 +42,7 @@ SensingState = namedtuple(
 #: The config keys a rig's sensing depends on (a test checks that building a Sensing reads
 #: no other key): equal values of these, with the same seed and step, build equal Sensings.
 SENSING_KEYS = ("sim.seed", "sensors.", "sensor_models.", "estimation.")
-_BUILT: OrderedDict = OrderedDict()  # key -> a Sensing as built, never handed out itself
-_BUILT_MAX = 8
+_BUILT = BuildCache(8, copy=lambda sensing: _copy_sensing(sensing))  # build key -> Sensing
 
 
 def _build_key(cfg: RigConfig, dt: float):
@@ -67,16 +67,8 @@ def build_sensing(cfg: RigConfig, dt: float) -> "Sensing":
     parameters draws its sensors and runs its calibrations once, and every run gets its own
     copy (with a fresh run-time random stream in the same state), bit-identical to a
     Sensing built from scratch (tested)."""
-    key = _build_key(cfg, dt)
-    if key is not None and key in _BUILT:
-        _BUILT.move_to_end(key)
-        return _copy_sensing(_BUILT[key])
-    sensing = Sensing(cfg, dt, np.random.SeedSequence(cfg["sim.seed"]))
-    if key is not None:
-        _BUILT[key] = _copy_sensing(sensing)
-        while len(_BUILT) > _BUILT_MAX:
-            _BUILT.popitem(last=False)
-    return sensing
+    return _BUILT.get_or_build(_build_key(cfg, dt),
+                               lambda: Sensing(cfg, dt, np.random.SeedSequence(cfg["sim.seed"])))
 
 
 def _copy_sensing(sensing: "Sensing") -> "Sensing":
