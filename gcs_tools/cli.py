@@ -17,6 +17,9 @@ Commands (``rig-gcs COMMAND --help`` for each):
   of Eq. 32, the bound R2 of Eq. 31 (exit 1 when the LMI is infeasible; needs the ``analysis`` extra).
 * ``reproduce -o DIR`` - the paper's experiments, our figures and numbers next to the paper's, a
   verdict on each claim (:mod:`gcs_tools.reproduce`, docs/REPRODUCTION.md).
+* ``identify --params KEY=LO:HI,... --paper | --tlog run.tlog --scenario NAME -o fit.toml`` - fit
+  parameters of the emulated rig to the paper's numbers or to flight logs, written as a preset
+  (:mod:`gcs_tools.identify`, docs/IDENTIFY.md).
 
 CONNECTION is a pymavlink connection string: ``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``, ...
 
@@ -399,12 +402,17 @@ def build_parser() -> argparse.ArgumentParser:
     from gcs_tools.reproduce.cli import add_parser as add_reproduce_parser
 
     add_reproduce_parser(sub)  # rig-gcs reproduce -o DIR (issue 7)
+
+    from gcs_tools.identify.cli import add_parser as add_identify_parser
+
+    add_identify_parser(sub)  # rig-gcs identify (issue 13)
     return parser
 
 
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # the command line, for files that say how they were made
     if args.command == "mission" and args.action != "make" and not args.connection:
         parser.error(f"mission {args.action} needs a CONNECTION")
     if args.command == "mission" and args.action == "make" and args.connection and not args.file:
