@@ -4,7 +4,8 @@ A parameter is addressed the way ``--set KEY=VALUE`` addresses configuration, pl
 element where a key holds several numbers:
 
 * ``motors.time_constant`` - a numeric key of :data:`rig_emulator.config.schema.SCHEMA`;
-* ``smc.k[0]`` - one element of a list key (``vec3`` / ``floats``);
+* ``smc.k[0]`` - one element of a list key (``vec3`` / ``floats``); ``smc.k[0,1]`` - several
+  elements tied to one fitted value (e.g. the roll and pitch gains alike);
 * ``disturbance.extra_masses[1].mass`` - one numeric field of one entry of a list of tables;
 * ``sensor_models.mpu6050.gyro.noise_density`` - a leaf of a sensor-model tree.
 
@@ -38,7 +39,7 @@ from typing import Any, Mapping
 from rig_emulator.config.loader import ConfigError, check_value
 from rig_emulator.config.schema import SCHEMA, Spec
 
-_KEY = re.compile(r"^(?P<base>[A-Za-z0-9_.]+?)(?:\[(?P<index>\d+)\](?:\.(?P<field>[A-Za-z0-9_]+))?)?$")
+_KEY = re.compile(r"^(?P<base>[A-Za-z0-9_.]+?)(?:\[(?P<index>\d+(?:,\d+)*)\](?:\.(?P<field>[A-Za-z0-9_]+))?)?$")
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,8 @@ class ParamKey:
     text: str  # as the user wrote it, canonical (``smc.k[0]``)
     base: str  # the schema key
     kind: str  # "scalar", "element", "table_field" or "tree_leaf"
-    index: int | None = None
+    index: int | None = None  # the entry of a list of tables
+    elements: tuple = ()  # the elements of a list key set to the fitted value
     field: str | None = None  # table field
     path: tuple = ()  # tree leaf path below the schema key
     spec: Spec | None = None  # the spec a single value is checked against (None for tree leaves)
@@ -78,7 +80,7 @@ class ParamKey:
             if self.kind == "scalar":
                 return float(v)
             if self.kind == "element":
-                return float(v[self.index])
+                return float(v[self.elements[0]])
             if self.kind == "table_field":
                 return float(v[self.index][self.field])
             node = v
@@ -96,10 +98,11 @@ class ParamKey:
             return
         current = overrides[self.base] if self.base in overrides else copy.deepcopy(cfg[self.base])
         if self.kind == "element":
-            if not isinstance(current, list) or self.index >= len(current):
+            if not isinstance(current, list) or max(self.elements) >= len(current):
                 raise ConfigError(f"{self.text}: {self.base} has {len(current) if isinstance(current, list) else 0} "
-                                  f"numbers in this configuration, no element {self.index}")
-            current[self.index] = float(value)
+                                  f"numbers in this configuration, no element {max(self.elements)}")
+            for i in self.elements:
+                current[i] = float(value)
         elif self.kind == "table_field":
             if not isinstance(current, list) or self.index >= len(current):
                 raise ConfigError(f"{self.text}: {self.base} has {len(current) if isinstance(current, list) else 0} "
@@ -130,6 +133,10 @@ def parse_key(text: str) -> ParamKey:
     if not m:
         raise ConfigError(f"parameter {text!r}: expected KEY, KEY[i] or KEY[i].FIELD")
     base, index, fld = m.group("base"), m.group("index"), m.group("field")
+    if index is not None:
+        elements = tuple(int(i) for i in index.split(","))
+        if len(set(elements)) != len(elements):
+            raise ConfigError(f"parameter {text!r}: an element is named twice")
     if base not in SCHEMA:
         # a leaf of a sensor-model tree: the longest schema prefix of kind "tree"
         parts = base.split(".")
@@ -148,10 +155,9 @@ def parse_key(text: str) -> ParamKey:
     if spec.kind in ("vec3", "floats"):
         if index is None or fld is not None:
             raise ConfigError(f"parameter {text!r}: {base} is a list; fit one element, e.g. {base}[0]")
-        i = int(index)
-        if spec.length is not None and i >= spec.length:
+        if spec.length is not None and max(elements) >= spec.length:
             raise ConfigError(f"parameter {text!r}: {base} has {spec.length} elements (index 0..{spec.length - 1})")
-        return ParamKey(text, base, "element", index=i, spec=_element_spec(spec))
+        return ParamKey(text, base, "element", elements=elements, spec=_element_spec(spec))
     if spec.kind == "table_list":
         if index is None or fld is None:
             raise ConfigError(f"parameter {text!r}: {base} is a list of tables; fit one field, e.g. {base}[0].FIELD")
@@ -160,7 +166,9 @@ def parse_key(text: str) -> ParamKey:
         item = spec.item[fld]
         if item.kind != "float":
             raise ConfigError(f"parameter {text!r}: {base}[].{fld} is not a continuous number ({item.kind})")
-        return ParamKey(text, base, "table_field", index=int(index), field=fld, spec=item)
+        if len(elements) != 1:
+            raise ConfigError(f"parameter {text!r}: name one entry of {base}, e.g. {base}[0].{fld}")
+        return ParamKey(text, base, "table_field", index=elements[0], field=fld, spec=item)
     if spec.kind == "int":
         raise ConfigError(f"parameter {text!r}: an integer parameter; identify fits continuous numbers only")
     if spec.kind == "tree":
@@ -242,7 +250,7 @@ def make_param(key: str, lo: Any, hi: Any, start: Any = None, prior: Any = None,
 def parse_params_arg(text: str) -> list[Param]:
     """``KEY=LO:HI[:START][,KEY=LO:HI...]`` (the ``--params`` option)."""
     out = []
-    for item in (s.strip() for s in text.split(",")):
+    for item in (s.strip() for s in re.split(r",(?![^\[]*\])", text)):  # commas outside [..]
         if not item:
             continue
         if "=" not in item:

@@ -14,12 +14,15 @@ parameters and its series compared, time-aligned, with the logged ones:
   against the run's ``thrust_meas`` (the filtered load-cell thrusts), in newtons.
 
 Time: the log's ``time_boot_ms`` / ``time_usec`` minus ``t_offset`` (the log time of the
-scenario's t = 0; 0 for the emulator's logs) is the scenario's time; the run's series
-(logged at ``sim.log_rate_hz``) are interpolated linearly at the logged samples, of which at
-most ``fit_hz`` per second are used (the first of each 1/fit_hz interval). Each residual is
-the difference divided by the channel's scale (:data:`DEFAULT_SCALES`: 1 deg, 0.05 m, 0.1 N,
-about the size of a sensor's noise on the rig), so the channels weigh alike; a simulated value
-that is not finite (a run that diverged) counts :data:`MISSING_RESIDUAL` scales.
+scenario's t = 0; 0 for the emulator's logs) is the scenario's time. Both sides are averaged
+over the same intervals of 1/``fit_hz`` s (the logged samples in an interval against the
+run's rows, logged at ``sim.log_rate_hz``, in it): a boxcar low-pass that keeps what the
+parameters shape (a response, a bias, a lag) and drops what no model can match sample by
+sample (a sign-switching controller's chattering, sensor noise, which diverge between any two
+runs that are not bit-identical). Each residual is the difference of the interval means
+divided by the channel's scale (:data:`DEFAULT_SCALES`: 1 deg, 0.05 m, 0.1 N), so the
+channels weigh alike; an interval the run does not reach (or a run that diverged) counts
+:data:`MISSING_RESIDUAL` scales.
 """
 
 from __future__ import annotations
@@ -72,25 +75,38 @@ class LoggedSeries:
 
     log: FlightLog
     digest: str  # SHA-256 of the file
-    t: dict = field(default_factory=dict)  # channel -> (n,)
-    values: dict = field(default_factory=dict)  # channel -> (n, k), paper frames / SI (attitude in rad)
+    t: dict = field(default_factory=dict)  # channel -> (n,) scenario time of each interval's first sample
+    bins: dict = field(default_factory=dict)  # channel -> (n,) interval index floor(t * fit_hz)
+    values: dict = field(default_factory=dict)  # channel -> (n, k) interval means, paper frames / SI (attitude in
+    # rad, yaw unwrapped)
+    samples: dict = field(default_factory=dict)  # channel -> logged samples used
     messages: dict = field(default_factory=dict)  # channel -> message type read
-
-    def t_max(self) -> float:
-        return max(float(t[-1]) for t in self.t.values())
+    t_last: float = 0.0  # scenario time of the last logged sample used
 
 
-def _decimate(t: np.ndarray, fit_hz: float) -> np.ndarray:
-    """Indices of the first sample in each 1/fit_hz interval (``t`` increasing)."""
-    if t.size == 0:
-        return np.zeros(0, dtype=int)
-    bins = np.floor(t * fit_hz + 1e-9)
-    keep = np.ones(t.size, dtype=bool)
-    keep[1:] = bins[1:] != bins[:-1]
-    return np.flatnonzero(keep)
+def interval_means(t: np.ndarray, values: np.ndarray, fit_hz: float, bins: np.ndarray | None = None):
+    """(interval indices, first time in each, mean of ``values`` in each) over intervals of 1/fit_hz s;
+    with ``bins``, the means over exactly those intervals (NaN where ``t`` has no sample)."""
+    b = np.floor(t * fit_hz + 1e-9).astype(np.int64)
+    if bins is None:
+        bins = np.unique(b)
+    pos = np.searchsorted(bins, b)
+    inside = (pos < bins.size) & (bins[np.minimum(pos, bins.size - 1)] == b)
+    pos = pos[inside]
+    count = np.bincount(pos, minlength=bins.size).astype(float)
+    means = np.full((bins.size, values.shape[1]), np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for i in range(values.shape[1]):
+            means[:, i] = np.bincount(pos, weights=values[inside, i], minlength=bins.size) / count
+    first = np.full(bins.size, np.nan)
+    if pos.size:
+        order = np.argsort(pos, kind="stable")
+        starts = np.r_[0, np.flatnonzero(np.diff(pos[order])) + 1]
+        first[pos[order][starts]] = t[inside][order][starts]
+    return bins, first, means
 
 
-def _select(t, values, log: FlightLog, fit_hz: float):
+def _select(t, values, log: FlightLog):
     t = t - log.t_offset
     ok = np.isfinite(t) & np.all(np.isfinite(values), axis=1) & (t >= 0.0)
     if log.t_from is not None:
@@ -101,9 +117,7 @@ def _select(t, values, log: FlightLog, fit_hz: float):
         ok &= t <= log.duration
     t, values = t[ok], values[ok]
     order = np.argsort(t, kind="stable")
-    t, values = t[order], values[order]
-    keep = _decimate(t, fit_hz)
-    return t[keep], values[keep]
+    return t[order], values[order]
 
 
 def read_log(log: FlightLog, channels, fit_hz: float) -> LoggedSeries:
@@ -142,11 +156,15 @@ def read_log(log: FlightLog, channels, fit_hz: float) -> LoggedSeries:
         else:
             missing.append(ch)
             continue
-        ts, vs = _select(np.asarray(t, dtype=float), np.asarray(v, dtype=float), log, fit_hz)
+        ts, vs = _select(np.asarray(t, dtype=float), np.asarray(v, dtype=float), log)
         if ts.size == 0:
             missing.append(f"{ch} (no sample in the window)")
             continue
-        out.t[ch], out.values[ch], out.messages[ch] = ts, vs, msg
+        if ch == "attitude":
+            vs[:, 2] = np.unwrap(vs[:, 2])
+        out.bins[ch], out.t[ch], out.values[ch] = interval_means(ts, vs, fit_hz)
+        out.samples[ch], out.messages[ch] = int(ts.size), msg
+        out.t_last = max(out.t_last, float(ts[-1]))
     if missing:
         need = {"attitude": "ATTITUDE", "position": "LOCAL_POSITION_NED",
                 "load_cells": "HILMS_LOAD_CELLS or NAMED_VALUE_FLOAT LC1_N..LC4_N"}
@@ -186,7 +204,7 @@ class TlogProblem(Problem):
         templates = []
         for k, s in enumerate(self.logs):
             lg = s.log
-            duration = lg.duration if lg.duration is not None else math.ceil((s.t_max() + 0.02) * 100.0) / 100.0
+            duration = lg.duration if lg.duration is not None else math.ceil((s.t_last + 0.02) * 100.0) / 100.0
             extra = {"sim.log_rate_hz": log_rate_hz} if log_rate_hz else {}
             templates.append(SimJob(lg.scenario, lg.strategy, seed=seed, duration=duration, overrides=extra,
                                     columns=("t",) + tuple(COLUMN_OF[c] for c in channels),
@@ -202,19 +220,18 @@ class TlogProblem(Problem):
                          for s, t in zip(self.logs, self.templates)]}
 
     def channel_residuals(self, logged: LoggedSeries, result) -> dict:
-        """channel -> (n, k) residual in the channel's unit (deg, m, N), NaN where the run has none."""
+        """channel -> (n, k) residual of the interval means in the channel's unit (deg, m, N), NaN where
+        the run has no row in an interval."""
         s = result.series
-        t_sim = s["t"]
+        t_sim = np.asarray(s["t"], dtype=float)
         out = {}
         for ch in self.channels:
             sim = np.asarray(s[COLUMN_OF[ch]], dtype=float)
             if ch == "attitude":
                 sim = sim.copy()
                 sim[:, 2] = np.unwrap(sim[:, 2])
-            t = logged.t[ch]
-            at = np.column_stack([np.interp(t, t_sim, sim[:, i], left=np.nan, right=np.nan)
-                                  for i in range(sim.shape[1])])
-            d = at - logged.values[ch]
+            _, _, means = interval_means(t_sim, sim, self.fit_hz, logged.bins[ch])
+            d = means - logged.values[ch]
             if ch == "attitude":
                 d[:, 2] = (d[:, 2] + np.pi) % (2.0 * np.pi) - np.pi
                 d = np.degrees(d)
@@ -238,7 +255,8 @@ class TlogProblem(Problem):
         rows = []
         for k, s in enumerate(self.logs):
             for ch in self.channels:
-                rows.append({"log": s.log.path, "channel": ch, "message": s.messages[ch], "samples": int(s.t[ch].size),
+                rows.append({"log": s.log.path, "channel": ch, "message": s.messages[ch], "samples": s.samples[ch],
+                             "intervals": int(s.bins[ch].size),
                              "rms": metrics.get(f"log{k}.{ch}.rms_{UNITS[ch]}", math.nan), "unit": UNITS[ch],
                              "scale": self.scales[ch], "missing": metrics.get(f"log{k}.{ch}.missing", 0)})
         return {"channels": rows, "n": int(residuals.size),

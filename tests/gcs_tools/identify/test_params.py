@@ -12,7 +12,7 @@ def test_scalar_element_table_field_and_tree_leaf_keys():
     (k,) = parse_params_arg("smc.k[1]=0.5:3")
     (tc,) = parse_params_arg("motors.time_constant=0.01:0.2:0.04")
     (leaf,) = parse_params_arg("sensor_models.mpu6050.gyro.noise_dps_per_rthz=0.001:0.02")
-    assert (k.key.kind, k.key.index, tc.start, leaf.key.path) == ("element", 1, 0.04, ("gyro", "noise_dps_per_rthz"))
+    assert (k.key.kind, k.key.elements, tc.start, leaf.key.path) == ("element", (1,), 0.04, ("gyro", "noise_dps_per_rthz"))
     cfg = load_config(scenario="extra-mass")
     (mass,) = parse_params_arg("disturbance.extra_masses[0].mass=0:0.2")
     ov = overrides_for([k, tc, leaf, mass], [2.0, 0.07, 0.005, 0.15], cfg)
@@ -29,10 +29,20 @@ def test_scalar_element_table_field_and_tree_leaf_keys():
     assert start_values([far], cfg) == [6.0]
 
 
+def test_tied_elements_take_one_value():
+    tied, lam = parse_params_arg("smc.k[0,1]=0.5:3,smc.lam[2]=0:1")
+    assert tied.key.elements == (0, 1) and lam.name == "smc.lam[2]"
+    cfg = load_config()
+    ov = overrides_for([tied, lam], [2.5, 0.3], cfg)
+    assert ov["smc.k"] == [2.5, 2.5, cfg["smc.k"][2]] and ov["smc.lam"][2] == 0.3
+
+
 @pytest.mark.parametrize("text, words", [
     ("smc.kk[0]=0:1", ["unknown parameter", "did you mean 'smc.k'"]),
     ("smc.k=0:1", ["is a list", "smc.k[0]"]),
     ("smc.k[3]=0:1", ["3 elements"]),
+    ("smc.k[0,0]=0:1", ["named twice"]),
+    ("disturbance.extra_masses[0,1].mass=0:1", ["one entry"]),
     ("smc.k[0]=-1:1", ["smc.k[0]", "lower bound", "[0, 10000]"]),
     ("airframe.ixx=0:1", ["airframe.ixx", "(0, 100]"]),
     ("airframe.ixx=0.05:200", ["upper bound", "(0, 100]"]),
