@@ -58,7 +58,8 @@ def mean_errors(t, euler, euler_des, pos, pos_des, window: tuple[float, float] |
 
 def format_table(rows: dict[str, dict[str, float]]) -> str:
     """Rows of mean errors as a text table in the layout of Table 6."""
-    head = f"{'strategy':<14} {'ME_phi(deg)':>11} {'ME_theta(deg)':>13} {'ME_psi(deg)':>11} {'ME_X(m)':>9} {'ME_Y(m)':>9} {'ME_Z(m)':>9}"
+    nw = max([14] + [len(name) for name in rows])
+    head = f"{'strategy':<{nw}} {'ME_phi(deg)':>11} {'ME_theta(deg)':>13} {'ME_psi(deg)':>11} {'ME_X(m)':>9} {'ME_Y(m)':>9} {'ME_Z(m)':>9}"
     lines = [head]
     widths = (11, 13, 11, 9, 9, 9)
     for name, errs in rows.items():
@@ -66,5 +67,5 @@ def format_table(rows: dict[str, dict[str, float]]) -> str:
         for col, w in zip(COLUMNS, widths):
             v = errs.get(col, math.nan)
             cells.append(f"{'-':>{w}}" if not math.isfinite(v) else f"{v:>{w}.4f}")
-        lines.append(f"{name:<14} " + " ".join(cells))
+        lines.append(f"{name:<{nw}} " + " ".join(cells))
     return "\n".join(lines)

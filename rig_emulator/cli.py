@@ -97,9 +97,10 @@ def cmd_simulate(args) -> int:
     sim = Simulation(cfg)
     result = sim.run()
     errors = result.mean_errors()
-    rows = {args.strategy: errors}
-    if args.scenario == "helix" and args.strategy in PAPER_TABLE_6:
-        rows[f"paper {args.strategy}"] = PAPER_TABLE_6[args.strategy]
+    rows = {f"{args.strategy} ({args.airframe})": errors}
+    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" else None
+    if paper is not None:
+        rows[f"paper {args.strategy}"] = paper
     if args.json:
         print(json.dumps({"scenario": args.scenario, "strategy": args.strategy, "seed": args.seed,
                           "mean_errors": {k: (None if not math.isfinite(v) else v) for k, v in errors.items()},
@@ -108,8 +109,13 @@ def cmd_simulate(args) -> int:
     else:
         print(f"scenario {args.scenario}, strategy {args.strategy}, seed {args.seed}: "
               f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
-        print("mean errors (Eq. 45):")
+        print(f"mean errors (Eq. 45) on the plant {args.airframe!r}"
+              + (" (the hardware rig; --airframe hilms-ideal for the ideal plant)" if args.airframe == "hilms" else "")
+              + ":")
         print(format_table(rows))
+        if paper is not None and result.sim_time_s >= 60.0 - 1e-9:
+            near = [c for c in paper if math.isfinite(errors[c]) and 0.5 <= errors[c] / paper[c] <= 2.0]
+            print(f"Table 6: {len(near)} of {len(paper)} mean errors within a factor 2 of the paper's")
         fs = _failsafe_summary(result)
         if fs is not None:
             what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"

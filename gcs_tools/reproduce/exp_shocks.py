@@ -18,7 +18,6 @@ from gcs_tools.reproduce import figures
 from gcs_tools.reproduce.experiment import (NOT_REPRODUCED, PARTLY, REPRODUCED, Context, Section, Verdict, fmt,
                                             status_of, table)
 from gcs_tools.reproduce.metrics import hf_rms, shock_response
-from rig_emulator.sweep import SimJob
 
 NAME = "shocks"
 TITLE = "Hover with shocks on the arms, SMC vs FLC"
@@ -32,8 +31,8 @@ QUICK_S = 8.0
 AXES = ("phi", "theta", "psi")
 
 
-def jobs(ctx: Context) -> list[SimJob]:
-    return [SimJob("hover-shocks", s, seed=ctx.seed, duration=QUICK_S if ctx.quick else None,
+def jobs(ctx: Context) -> list:
+    return [ctx.job("hover-shocks", s, duration=QUICK_S if ctx.quick else None,
                    overrides={"sim.log_rate_hz": LOG_HZ}, columns=("t", "euler", "euler_des", "v_cmd"),
                    label=f"{NAME}/{s}") for s in STRATEGIES]
 

@@ -67,6 +67,10 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
         dez = ref[REF_VEL + 2] - vel[2]
         weight = cp.mass * cp.g
         if cp.pos_law == FLC:
+            if cp.flc_rate_share != 1.0:  # issue 13: derivative on the measurement, partly or wholly
+                dex = cp.flc_rate_share * ref[REF_VEL] - vel[0]
+                dey = cp.flc_rate_share * ref[REF_VEL + 1] - vel[1]
+                dez = cp.flc_rate_share * ref[REF_VEL + 2] - vel[2]
             # Eq. 37: uX, uY and the altitude correction of u1 from three fuzzy axes
             ux = flc_axis(ex, dex, cp.flc_x, cp.rule_table)
             uy = flc_axis(ey, dey, cp.flc_y, cp.rule_table)

@@ -16,7 +16,8 @@ from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.control.controller import OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S, OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL
 from rig_emulator.guidance.runner import ATTITUDE, GS_DONE, GS_INDEX, GS_STARTED, HOVER, WAYPOINTS, start_at
 from rig_emulator._jit import jit
-from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
+from rig_emulator.physics.hardware import motor_thrust
+from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 from rig_emulator.simulation.faults import FaultEvent, FaultStatus
@@ -67,7 +68,7 @@ def _fill_snapshot(x, pp, ref, cout, v_cmd, estimated, att_est, onboard, out):
         out[28 + i] = cout[OUT_ATT_RATE_DES + i]
         out[51 + i] = cout[OUT_S + i]
     for i in range(4):
-        f = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], pp.hw)
         out[31 + i] = f
         out[35 + i] = cout[OUT_THRUST_CMD + i]
         out[39 + i] = v_cmd[i]
@@ -284,7 +285,8 @@ class LiveRig:
             if key in _RESTART_ONLY and changes[key] != self.cfg.get(key):
                 raise ConfigError(f"{key}: cannot change while the rig runs; restart it with the new value")
         new_cfg = self.cfg.with_overrides(changes)
-        pp = physics_params(new_cfg, self.sim.pp.thrust_efficiency)  # injected motor faults persist
+        # injected motor faults and the hardware effects' state (command buffer, noise) persist
+        pp = physics_params(new_cfg, self.sim.pp.thrust_efficiency, self.sim.pp.hw)
         cp = control_params(new_cfg)
         up = self.sim.supervisor_params(new_cfg)
         gp = self._guidance_from(new_cfg, self.sim.gp)

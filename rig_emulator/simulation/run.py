@@ -79,6 +79,7 @@ class Simulation:
         hover_v = voltage_for_thrust(self.pp.mass * self.pp.g / 4.0, self.pp.k_v, self.pp.v_max)
         self.x[S.MOTOR_V : S.MOTOR_V + 4] = hover_v
         self.v_cmd = np.full(4, hover_v)
+        self.pp.hw.cmd_buf[:] = hover_v  # a delayed actuator starts from the hover command too
         self.cstate = np.zeros(CS_SIZE)
         self.gstate = np.zeros(GS_SIZE)
         self.reached_t = np.full(self.gp.waypoints.shape[0], np.nan)
