@@ -62,6 +62,9 @@ def add_parser(sub) -> None:
                                                      "optionally [[tlog]] tables (path, scenario, strategy, ...)")
     g.add_argument("--prior", action="append", default=[], metavar="KEY=MEAN+-SIGMA",
                    help="Gaussian prior on a fitted parameter (repeatable)")
+    g.add_argument("--step", action="append", default=[], metavar="KEY=STEP",
+                   help="smallest finite-difference step of a parameter in its unit, for a key the rig quantises "
+                        "(e.g. control.actuation_delay=0.001: whole physics steps) (repeatable)")
     g = p.add_argument_group("targets (one of)")
     g.add_argument("--paper", action="store_true", help="the paper's 18 numbers (gcs_tools/identify/paper_targets.toml)")
     g.add_argument("--claims", action="store_true", help="with --paper: also the paper's qualitative claims the same "
@@ -200,7 +203,7 @@ def build(args):
         if spec:
             params += P.params_from_spec(spec, f"--spec {args.spec}")
         priors = dict(P.parse_prior_arg(t) for t in args.prior)
-        params = P.merge(params, priors)
+        params = P.merge(params, priors, dict(P.parse_step_arg(t) for t in args.step))
         if not params:
             raise UsageError("no parameter to fit: give --params KEY=LO:HI or --spec FILE with [[param]] tables")
         if args.airframe not in available("airframes"):

@@ -9,7 +9,8 @@ where a black-box optimiser (CMA-ES, Bayesian optimisation) needs hundreds, and 
 at the optimum gives the uncertainty. What is not smooth - a switching controller's chattering,
 a fuzzy controller's rule boundaries - is averaged over each run's thousands of control
 periods; the finite-difference step is therefore large (``fd_step``, 2 % of each parameter's
-range by default) rather than at machine precision. For a rough objective or several minima,
+range by default; a parameter's own ``step`` when larger, e.g. a delay the rig rounds to
+whole physics steps) rather than at machine precision. For a rough objective or several minima,
 ``starts`` evaluates a scrambled Halton design of the bounds first (in one parallel sweep) and
 starts from its best point.
 
@@ -186,9 +187,15 @@ class Evaluator:
             self.best = (cost, zz)
 
 
-def _fd_points(z: np.ndarray, step: float) -> tuple[list, np.ndarray]:
+def fd_steps(params: list[Param], step: float) -> np.ndarray:
+    """Each parameter's finite-difference step in z: ``step``, or its own ``step`` when larger."""
+    return np.array([min(0.5, max(step, (p.step or 0.0) / (p.hi - p.lo))) for p in params])
+
+
+def _fd_points(z: np.ndarray, steps: np.ndarray) -> tuple[list, np.ndarray]:
     pts, hs = [], np.empty(z.size)
     for i in range(z.size):
+        step = steps[i]
         h = step if z[i] + step <= 1.0 else -step
         zz = z.copy()
         zz[i] += h
@@ -199,7 +206,7 @@ def _fd_points(z: np.ndarray, step: float) -> tuple[list, np.ndarray]:
 
 def jacobian(ev: Evaluator, z: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
     """(residual vector at z, forward-difference Jacobian in z), the n+1 points as one batch."""
-    pts, hs = _fd_points(z, step)
+    pts, hs = _fd_points(z, fd_steps(ev.params, step))
     evs = ev.evaluate_z([z] + pts)
     vals = [[p.from_unit(x) for p, x in zip(ev.params, zz)] for zz in [z] + pts]
     f0 = ev.total(evs[0], vals[0])

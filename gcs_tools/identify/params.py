@@ -25,6 +25,8 @@ or a spec file (``--spec fit.toml``)::
     hi = 0.1
     start = 0.05          # optional: default the configured value (mid-range when outside the bounds)
     prior = [0.05, 0.01]  # optional Gaussian prior: mean, sigma
+    step = 0.001          # optional: smallest finite-difference step in the key's unit (``--step KEY=STEP``),
+                          # for a key the rig quantises (``control.actuation_delay``: whole physics steps)
 """
 
 from __future__ import annotations
@@ -185,6 +187,7 @@ class Param:
     hi: float
     start: float | None = None
     prior: tuple | None = None  # (mean, sigma)
+    step: float | None = None  # smallest finite-difference step, own unit (a quantised key: its quantum)
 
     @property
     def name(self) -> str:
@@ -204,6 +207,8 @@ class Param:
             d["start"] = self.start
         if self.prior is not None:
             d["prior"] = list(self.prior)
+        if self.step is not None:
+            d["step"] = self.step
         return d
 
 
@@ -219,7 +224,8 @@ def _number(text: Any, what: str) -> float:
     return v
 
 
-def make_param(key: str, lo: Any, hi: Any, start: Any = None, prior: Any = None, where: str = "") -> Param:
+def make_param(key: str, lo: Any, hi: Any, start: Any = None, prior: Any = None, where: str = "",
+               step: Any = None) -> Param:
     """A validated :class:`Param` (ConfigError naming ``where`` and the key otherwise)."""
     label = f"{where}{key}" if where else key
     try:
@@ -244,7 +250,12 @@ def make_param(key: str, lo: Any, hi: Any, start: Any = None, prior: Any = None,
         if not sigma > 0:
             raise ConfigError(f"{label}: prior sigma {sigma:g} must be > 0")
         pr = (mean, sigma)
-    return Param(pk, lo_v, hi_v, st, pr)
+    sp = None
+    if step is not None:
+        sp = _number(step, f"{label}: step")
+        if not 0 < sp <= 0.5 * (hi_v - lo_v):
+            raise ConfigError(f"{label}: step {sp:g} must be > 0 and at most half the range ({0.5 * (hi_v - lo_v):g})")
+    return Param(pk, lo_v, hi_v, st, pr, sp)
 
 
 def parse_params_arg(text: str) -> list[Param]:
@@ -279,36 +290,47 @@ def params_from_spec(doc: Mapping, where: str) -> list[Param]:
         raise ConfigError(f"{where}: 'param' must be a list of tables ([[param]])")
     out = []
     for i, p in enumerate(items):
-        unknown = set(p) - {"key", "lo", "hi", "start", "prior"}
+        unknown = set(p) - {"key", "lo", "hi", "start", "prior", "step"}
         if unknown:
-            raise ConfigError(f"{where}: param[{i}]: unknown field(s) {sorted(unknown)}; allowed: key, lo, hi, start, prior")
+            raise ConfigError(f"{where}: param[{i}]: unknown field(s) {sorted(unknown)}; allowed: key, lo, hi, start, "
+                              "prior, step")
         for need in ("key", "lo", "hi"):
             if need not in p:
                 raise ConfigError(f"{where}: param[{i}]: missing {need!r}")
         if not isinstance(p["key"], str):
             raise ConfigError(f"{where}: param[{i}].key must be a string")
-        out.append(make_param(p["key"], p["lo"], p["hi"], p.get("start"), p.get("prior"), where=f"{where}: "))
+        out.append(make_param(p["key"], p["lo"], p["hi"], p.get("start"), p.get("prior"), where=f"{where}: ",
+                              step=p.get("step")))
     return out
 
 
-def merge(params: list[Param], priors: dict) -> list[Param]:
-    """``params`` with the ``--prior`` priors attached; ConfigError for a duplicate key or a prior
-    on a key that is not fitted."""
+def merge(params: list[Param], priors: dict, steps: dict | None = None) -> list[Param]:
+    """``params`` with the ``--prior`` priors and ``--step`` steps attached; ConfigError for a
+    duplicate key, or a prior or step on a key that is not fitted."""
+    steps = steps or {}
     seen = set()
     for p in params:
         if p.name in seen:
             raise ConfigError(f"parameter {p.name!r} is given twice")
         seen.add(p.name)
-    for k in priors:
-        if k not in seen:
-            raise ConfigError(f"--prior {k}: not among the fitted parameters ({', '.join(sorted(seen)) or 'none'})")
+    for opt, given in (("--prior", priors), ("--step", steps)):
+        for k in given:
+            if k not in seen:
+                raise ConfigError(f"{opt} {k}: not among the fitted parameters ({', '.join(sorted(seen)) or 'none'})")
     out = []
     for p in params:
-        if p.name in priors:
-            mean, sigma = priors[p.name]
-            p = make_param(p.name, p.lo, p.hi, p.start, (mean, sigma))
+        if p.name in priors or p.name in steps:
+            p = make_param(p.name, p.lo, p.hi, p.start, priors.get(p.name, p.prior), step=steps.get(p.name, p.step))
         out.append(p)
     return out
+
+
+def parse_step_arg(text: str) -> tuple[str, float]:
+    """``KEY=STEP`` (the ``--step`` option) -> (key, step in the key's unit)."""
+    if "=" not in text:
+        raise ConfigError(f"--step {text!r}: expected KEY=STEP")
+    key, v = (s.strip() for s in text.split("=", 1))
+    return key, _number(v, f"--step {key}")
 
 
 def start_values(params: list[Param], cfg: Mapping[str, Any]) -> list[float]:

@@ -127,7 +127,8 @@ def summary_lines(summary: dict) -> list[str]:
     if "channels" in summary:
         lines.append("residuals (rms of simulated - logged, per log and channel):")
         for r in summary["channels"]:
-            lines.append(f"  {r['log']} {r['channel']} ({r['message']}, {r['samples']} samples): "
+            lines.append(f"  {r['log']} {r['channel']} ({r['message']}, {r['samples']} samples in {r['intervals']} "
+                         f"intervals): "
                          f"{r['rms']:.4g} {r['unit']} rms (scale {r['scale']:g} {r['unit']})"
                          + (f", {r['missing']} not simulated" if r["missing"] else ""))
         lines.append(f"rms of the scaled residuals {summary['rms_scaled']:.4g} over {summary['n']} residuals")
