@@ -276,6 +276,8 @@ def cmd_identify(args) -> int:
         raise OperationError(str(exc)) from None
     except OSError as exc:  # e.g. a Dask scheduler that cannot be reached
         raise OperationError(f"running the simulations failed: {exc}") from None
+    except RuntimeError as exc:  # dask.distributed missing for --scheduler
+        raise OperationError(str(exc)) from None
     finally:
         shutdown_pool()
     argv = getattr(args, "argv", None)

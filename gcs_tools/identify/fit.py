@@ -225,13 +225,31 @@ def identify(problem, params: list[Param], *, record_path=None, workers=None, sc
              fd_step: float = DEFAULT_FD_STEP, tol: float = DEFAULT_TOL, show_progress: bool = True,
              stream=None) -> FitResult:
     """Fit ``params`` to ``problem``'s targets (see the module docstring)."""
-    from scipy.optimize import least_squares
-
     if not params:
         raise ValueError("no parameter to fit")
     if not 0.0 < fd_step < 0.5:
         raise ValueError(f"fd_step {fd_step!r}: must be in (0, 0.5)")
     t0 = time.perf_counter()
+    own_client = None
+    if isinstance(scheduler, str):  # one connection to the cluster for the whole fit, not one per batch
+        try:
+            from distributed import Client
+        except ImportError:
+            raise RuntimeError("running on a Dask cluster needs dask.distributed: pip install 'hilms-sil[cluster]'") \
+                from None
+        scheduler = own_client = Client(scheduler, timeout="30s")
+    try:
+        return _identify(problem, params, t0, record_path, workers, scheduler, max_evals, starts, design_seed,
+                         fd_step, tol, show_progress, stream)
+    finally:
+        if own_client is not None:
+            own_client.close()
+
+
+def _identify(problem, params, t0, record_path, workers, scheduler, max_evals, starts, design_seed, fd_step, tol,
+              show_progress, stream) -> FitResult:
+    from scipy.optimize import least_squares
+
     context = digest({"problem": problem.context(), "params": [p.describe() for p in params],
                       "emulator": emulator_fingerprint()})
     record = Record(record_path, context)
