@@ -47,13 +47,40 @@ def reading(k: str, lam: str, ceiling: str = "eq40") -> tuple[str, dict]:
     return label, over
 
 
-#: Every K x lambda reading with the printed ceiling, and the three ceilings with the readings that matter.
+#: Each unit of K and of lambda at least once, the combinations that matter, and the three ceilings.
 READINGS = (
-    [reading(k, lam) for k in ("si", "thrust", "torque") for lam in ("si", "deg", "time-constant")]
-    + [reading("si", "si", c) for c in ("supply", "convex")]
-    + [reading("thrust", "deg", c) for c in ("supply", "convex")]
-    + [reading("thrust", "time-constant", c) for c in ("supply", "convex")]
+    reading("si", "si"),
+    reading("si", "deg"),
+    reading("thrust", "si"),
+    reading("thrust", "deg"),
+    reading("thrust", "time-constant"),
+    reading("torque", "deg"),
+    reading("thrust", "deg", "supply"),
+    reading("thrust", "deg", "convex"),
 )
+
+
+def _from_results(path: Path, over: dict, n_seeds: int):
+    """The sections of an earlier run of the same reading (results.json), or None."""
+    import json
+
+    from gcs_tools.reproduce.experiment import Section, Verdict
+
+    if not path.is_file():
+        return None
+    doc = json.loads(path.read_text())
+    plants = doc.get("plants") or {}
+    if len(plants) != 1:
+        return None
+    (col,) = plants.values()
+    if col["overrides"] != over or len(col["seeds"]) != n_seeds:
+        return None
+    secs = [Section(name, e["title"], e["paper"], "", [], e["numbers"],
+                    [Verdict(v["claim"], v["status"], v["evidence"]) for v in e["verdicts"]])
+            for name, e in doc["experiments"].items()]
+    if len(col["seeds"]) != 1:
+        return None
+    return {col["seeds"][0]: secs}
 
 
 def main(argv=None) -> int:
@@ -75,7 +102,11 @@ def main(argv=None) -> int:
     columns = []
     chosen = [r for r in READINGS if not args.only_reading or any(s in r[0] for s in args.only_reading)]
     for i, (label, over) in enumerate(chosen):
-        out = Path(args.output) / f"reading-{i:02d}"
+        out = Path(args.output) / label.replace(", ", "_").replace(" ", "-")
+        earlier = _from_results(out / "results.json", over, args.seeds)
+        if earlier is not None:  # resumed: this reading ran before with the same overrides
+            columns.append(PlantRuns(label, args.plant, tuple(sorted(over.items())), earlier))
+            continue
         outcome = reproduce(out, seed=args.seed, workers=args.workers, only=names, show_progress=False,
                             plants=(args.plant,), seeds=args.seeds, overrides=over, live=False)
         col = outcome.columns[0]

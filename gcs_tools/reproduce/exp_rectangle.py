@@ -54,7 +54,8 @@ def headless_live(ctx: Context, result):
     reached = [(k, float(t)) for k, t in enumerate(result.reached_t) if np.isfinite(t)]
     return LiveRun(waypoints=wp, radius_m=paper_data.RECTANGLE_SWITCHING_RADIUS_M, duration_s=duration(ctx),
                    t_pos=s["t"], pos=s["pos"], pos_target=s["pos_des"], t_att=s["t"], euler=np.zeros((s["t"].size, 3)),
-                   euler_target=np.zeros((s["t"].size, 3)), reached=reached, stream_hz=0.0, messages=0)
+                   euler_target=np.zeros((s["t"].size, 3)), reached=reached, stream_hz=0.0, messages=0,
+                   rig_exit_code=0)
 
 
 def _errors(t, pos, target, t_end) -> dict:
