@@ -43,7 +43,8 @@ from gcs_tools.identify.record import Evaluation, Record, digest
 DEFAULT_FD_STEP = 0.02
 DEFAULT_TOL = 1e-3
 AT_BOUND = 1e-3  # z this close to 0 or 1 counts as at the bound
-NO_EFFECT = 1e-12  # a Jacobian column norm below this: the targets do not see the parameter
+NO_EFFECT = 1e-12
+POLISH_ROUNDS = 3  # Jacobians evaluated after least_squares stops, at most  # a Jacobian column norm below this: the targets do not see the parameter
 
 
 class BudgetExhausted(Exception):
@@ -295,11 +296,21 @@ def _identify(problem, params, t0, record_path, workers, scheduler, max_evals, s
     except BudgetExhausted as exc:
         status = f"stopped: {exc}; the best point evaluated is reported"
         z_best = np.array(ev.best[1]) if ev.best is not None else z0
-    # the Jacobian at the optimum (from the cache when least_squares computed it there)
+    # the Jacobian at the optimum (from the cache when least_squares computed it there); its
+    # finite-difference points may hold a better point (least_squares stops on a small step before
+    # accepting it, or the objective is rough): then that point and its Jacobian, a few times at most
     ev.max_evals = None
     try:
-        key = tuple(float(x) for x in z_best)
-        f_opt, j = jac_cache[key] if key in jac_cache else jacobian(ev, z_best, fd_step)
+        for _ in range(POLISH_ROUNDS):
+            key = tuple(float(x) for x in z_best)
+            f_opt, j = jac_cache[key] if key in jac_cache else jacobian(ev, z_best, fd_step)
+            if ev.best is None or ev.best[0] >= 0.5 * float(f_opt @ f_opt):
+                break
+            z_best = np.array(ev.best[1])
+            status += "; a better point found by the final Jacobian is reported"
+        else:
+            key = tuple(float(x) for x in z_best)
+            f_opt, j = jac_cache[key] if key in jac_cache else jacobian(ev, z_best, fd_step)
     finally:
         progress.close()
     values = [p.from_unit(z) for p, z in zip(params, z_best)]

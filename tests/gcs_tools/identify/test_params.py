@@ -72,7 +72,11 @@ def test_priors_and_spec_tables():
     with pytest.raises(ConfigError, match="given twice"):
         merge(params + params[:1], {})
     with pytest.raises(ConfigError, match="unknown field"):
-        params_from_spec({"param": [{"key": "smc.k[0]", "lo": 0, "hi": 1, "step": 1}]}, "spec.toml")
+        params_from_spec({"param": [{"key": "smc.k[0]", "lo": 0, "hi": 1, "stride": 1}]}, "spec.toml")
+    (d,) = params_from_spec({"param": [{"key": "control.actuation_delay", "lo": 0, "hi": 0.02, "step": 0.001}]}, "s")
+    assert d.step == 0.001
+    with pytest.raises(ConfigError, match="at most half the range"):
+        params_from_spec({"param": [{"key": "control.actuation_delay", "lo": 0, "hi": 0.02, "step": 0.015}]}, "s")
     with pytest.raises(ConfigError, match="sigma"):
         params_from_spec({"param": [{"key": "smc.k[0]", "lo": 0, "hi": 1, "prior": [0.5, 0]}]}, "spec.toml")
 
