@@ -102,8 +102,9 @@ def add_parser(sub) -> None:
     g.add_argument("--seed", type=_seed, default=0, help="seed of every simulated run: %(default)s")
     g.add_argument("--starts", type=_starts, default=0, metavar="N",
                    help="evaluate N scrambled Halton points of the bounds first and start from the best: %(default)s")
-    g.add_argument("--fd-step", type=_fraction, default=0.02, help="finite-difference step, fraction of each range: "
-                                                                  "%(default)s")
+    g.add_argument("--fd-step", type=_fraction, help="finite-difference step, fraction of each range (default 0.08 "
+                                                      "with --paper, whose runs are not smooth at smaller steps; 0.02 "
+                                                      "with --tlog)")
     g.add_argument("--tol", type=_positive, default=1e-3, help="least_squares ftol/xtol/gtol: %(default)s")
     g.add_argument("--no-progress", action="store_true", help="no progress output on stderr")
     p.set_defaults(func=cmd_identify)
@@ -254,7 +255,7 @@ def _targets_text(problem) -> str:
 
 
 def cmd_identify(args) -> int:
-    from gcs_tools.identify.fit import identify
+    from gcs_tools.identify.fit import DEFAULT_FD_STEP, PAPER_FD_STEP, identify
     from gcs_tools.identify.preset import header_lines, preset_text
     from protocol.atomic_file import atomic_write_text
     from rig_emulator.config.loader import ConfigError, load_config
@@ -270,7 +271,8 @@ def cmd_identify(args) -> int:
         raise UsageError("--record and -o must be different files")
     try:
         result = identify(problem, params, record_path=args.record, workers=args.workers, scheduler=args.scheduler,
-                          max_evals=args.max_evals, starts=args.starts, design_seed=args.seed, fd_step=args.fd_step,
+                          max_evals=args.max_evals, starts=args.starts, design_seed=args.seed,
+                          fd_step=args.fd_step or (PAPER_FD_STEP if problem.kind == "paper" else DEFAULT_FD_STEP),
                           tol=args.tol, show_progress=not args.no_progress)
     except (JobFailed, ConfigError) as exc:
         raise OperationError(str(exc)) from None
