@@ -40,6 +40,11 @@ def enu_to_ned(v) -> np.ndarray:
     return np.stack([arr[..., 1], arr[..., 0], -arr[..., 2]], axis=-1)
 
 
+def enu_to_ned_xyz(e: float, n: float, u: float) -> tuple[float, float, float]:
+    """One ENU vector as three floats -> NED (n, e, -u) as floats (for per-step messages)."""
+    return float(n), float(e), -float(u)
+
+
 def ned_to_enu(v) -> np.ndarray:
     """Vectors in NED (shape (3,) or (N, 3)) to ENU: (n, e, d) -> (e, n, -d)."""
     arr = _vectors(v)

@@ -25,6 +25,7 @@ import numpy as np
 from rig_emulator.config.loader import ConfigError
 from rig_emulator.physics import state as S
 from rig_emulator.simulation.hil_readout import HilReadout, hil_readout
+from rig_emulator.simulation.run import Simulation
 
 #: keys the lockstep plant sets over the rig's configuration
 LOCKSTEP_OVERRIDES = {"failsafe.action": "report"}
@@ -57,17 +58,25 @@ class LockstepPlant:
         return float(self.rig.cfg["motors.voltage_max"])
 
     def restart(self) -> None:
-        """A fresh plant from the rig's configuration (time 0, motors off)."""
-        self.rig.restart_external(LOCKSTEP_OVERRIDES)
-        self._velocity_prev = self.rig.sim.x[S.VEL:S.VEL + 3].copy()
+        """A fresh plant from the rig's configuration (time 0, motors off): the served rig's
+        simulation is replaced by one whose motors are commanded from outside."""
+        rig = self.rig
+        cfg = rig.cfg.with_overrides(LOCKSTEP_OVERRIDES)
+        sim = Simulation(cfg, log_capacity=rig.chunk_steps_max + 1, external_motors=True)
+        sim.armed = False
+        sim.warm_up()
+        rig.sim = sim
+        self._velocity_prev = sim.x[S.VEL:S.VEL + 3].copy()
         self._armed = False
 
     def command(self, voltages, armed: bool) -> None:
-        """Hold these motor voltage commands (V, motors 1..4) from the next step on."""
-        self.rig.set_motor_voltages(voltages)
+        """Hold these motor voltage commands (V, motors 1..4) from the next step on (armed:
+        the motor drivers are enabled; disarmed, the loop holds 0 V)."""
+        sim = self.rig.sim
+        sim.set_motor_voltages(voltages)
         if armed != self._armed:
             self._armed = armed
-            self.rig.arm(armed)
+            sim.armed = armed
 
     def advance(self) -> HilReadout:
         """One step of the flight stack's rate; the readout at its end."""

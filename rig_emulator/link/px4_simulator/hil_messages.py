@@ -3,7 +3,7 @@
 
 Frames: HIL_SENSOR's vectors are body FRD, which is the rig's body frame B, so they pass
 unchanged; positions and velocities are NED (``protocol.frames``) and geodetic about
-``home`` (``protocol.geodesy``); the attitude quaternion is R_NED_FRD. Units: HIL_SENSOR
+``home`` (``protocol.geodesy.TangentPlane``); the attitude quaternion is R_NED_FRD. Units: HIL_SENSOR
 m/s^2, rad/s, gauss, hPa, m, degC; HIL_GPS and HIL_STATE_QUATERNION degE7, mm, cm/s,
 centidegrees, milli-g (:mod:`rig_emulator.link.mavlink_units`,
 :mod:`rig_emulator.link.px4_simulator.hil_units`).
@@ -14,8 +14,8 @@ from __future__ import annotations
 import math
 
 from protocol.dialect import mavlink
-from protocol.frames import enu_to_ned, mavlink_quaternion_from_quat_wb
-from protocol.geodesy import Home, local_enu_to_global
+from protocol.frames import enu_to_ned_xyz, mavlink_quaternion_from_quat_wb
+from protocol.geodesy import TangentPlane
 from rig_emulator.link import mavlink_units as U
 from rig_emulator.link.px4_simulator import hil_units as H
 
@@ -55,15 +55,14 @@ def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False):
         fields_updated=H.FIELDS_ALL if all_fields else fields_updated(readout), id=sensor_id)
 
 
-def _geodetic(readout, home: Home):
-    lat, lon, alt = local_enu_to_global(home, readout.position)
-    return float(lat), float(lon), float(alt)
+def _geodetic(readout, plane: TangentPlane):
+    return plane.to_global(*(float(v) for v in readout.position))
 
 
-def hil_gps(readout, home: Home):
-    """HIL_GPS: the virtual position about ``home`` (3D fix, ideal)."""
-    lat, lon, alt = _geodetic(readout, home)
-    vn, ve, vd = (float(v) for v in enu_to_ned(readout.velocity))
+def hil_gps(readout, plane: TangentPlane):
+    """HIL_GPS: the virtual position about the home of ``plane`` (3D fix, ideal)."""
+    lat, lon, alt = _geodetic(readout, plane)
+    vn, ve, vd = enu_to_ned_xyz(*readout.velocity)
     speed = math.hypot(vn, ve)
     cog = U.heading_rad_to_cdeg(math.atan2(ve, vn)) if speed >= GPS_SPEED_UNKNOWN_BELOW_M_S else U.UINT16_UNKNOWN
     accuracy_cm = H.cm_u16(GPS_ACCURACY_M)
@@ -74,13 +73,13 @@ def hil_gps(readout, home: Home):
         satellites_visible=GPS_SATELLITES, id=0, yaw=0)
 
 
-def hil_state_quaternion(readout, home: Home):
+def hil_state_quaternion(readout, plane: TangentPlane):
     """HIL_STATE_QUATERNION: the true attitude, body rates, virtual position, velocity and
     acceleration (ground truth for the flight stack's log; the acceleration NED in milli-g
     as common.xml gives the unit)."""
-    lat, lon, alt = _geodetic(readout, home)
-    vn, ve, vd = (float(v) for v in enu_to_ned(readout.velocity))
-    an, ae, ad = (float(v) for v in enu_to_ned(readout.acceleration))
+    lat, lon, alt = _geodetic(readout, plane)
+    vn, ve, vd = enu_to_ned_xyz(*readout.velocity)
+    an, ae, ad = enu_to_ned_xyz(*readout.acceleration)
     w, x, y, z = mavlink_quaternion_from_quat_wb(readout.quaternion)
     p, q, r = (float(v) for v in readout.body_rates)
     speed = math.sqrt(vn * vn + ve * ve + vd * vd)

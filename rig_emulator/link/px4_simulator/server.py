@@ -78,13 +78,11 @@ class Px4SimulatorServer:
         """Serve until :meth:`stop`, or until a session has run ``duration`` simulated seconds."""
         t_end = math.inf if duration is None else duration - 0.5 * self.plant.period_s
         self._next_ground = time.monotonic()
+        listening = self.transport.filenos()
         while not self._stop:
             now = time.monotonic()
             if now >= self._next_ground:
                 self._service_ground(now)
-            conn = self.transport.accept(busy=self.session is not None)
-            if conn is not None:
-                self._start_session(conn)
             s = self.session
             if s is not None:
                 for _ in range(s.free_run_due(now)):
@@ -92,27 +90,37 @@ class Px4SimulatorServer:
                 if not s.conn.open:
                     self._end_session()
                     continue
-                if self.plant.time_s >= t_end:
-                    break
+            elif not listening:  # a serial line: open it (again) when it can be
+                self._accept()
+            if self.session is not None and self.plant.time_s >= t_end:
+                break
+            s = self.session
             ground = self._ground_sockets()
-            fds = ground + self.transport.filenos() + ([s.conn] if s is not None else [])
+            fds = ground + listening + ([s.conn] if s is not None else [])
             timeout = max(self._next_ground - now, 0.0)
             if s is not None:
                 free = s.next_free_run_in(now)
                 if free is not None:
                     timeout = min(timeout, free)
-            elif not self.transport.filenos():
-                timeout = min(timeout, 0.05)  # a serial line to reopen
-            readable = select.select(fds, [], [], timeout)[0] if fds else time.sleep(timeout) or []
-            if s is not None and s.conn in readable:
-                if not s.on_readable():
-                    self._end_session()
-                elif self.plant.time_s >= t_end:
-                    break
-            if readable and any(sock in readable for sock in ground):
+            elif not listening:
+                timeout = min(timeout, 0.05)
+            readable = select.select(fds, [], [], timeout)[0]
+            if not readable:
+                continue
+            # the session first: a flight stack that closed and reconnected at once is over before the new one
+            if s is not None and s.conn in readable and not s.on_readable():
+                self._end_session()
+            if listening and listening[0] in readable:
+                self._accept()
+            if any(sock in readable for sock in ground):
                 self._service_ground(time.monotonic())
         if self.session is not None:
             self._end_session()
+
+    def _accept(self) -> None:
+        conn = self.transport.accept(busy=self.session is not None)
+        if conn is not None:
+            self._start_session(conn)
 
     def close(self) -> None:
         if self.session is not None:

@@ -27,6 +27,7 @@ import math
 import time
 
 from protocol.dialect import mavlink
+from protocol.geodesy import TangentPlane
 from rig_emulator.link.channel import saturate_floats
 from rig_emulator.link.counters import LinkCounters
 from rig_emulator.link.px4_simulator import hil_messages, hil_units
@@ -45,6 +46,7 @@ class SimulatorSession:
         self.conn = conn
         self.plant = plant
         self.home = home
+        self.plane = TangentPlane(home)
         self.speedup = speedup if speedup > 0.0 else 1.0  # free-run pace; lockstep ignores it
         self.all_fields = all_fields
         self.counters = counters or LinkCounters()
@@ -155,9 +157,9 @@ class SimulatorSession:
         self.counters.steps += self.plant.steps_per_update
         self.send(hil_messages.hil_sensor(readout, all_fields=self.all_fields))
         if self.steps % self.gps_div == 0:
-            self.send(hil_messages.hil_gps(readout, self.home))
+            self.send(hil_messages.hil_gps(readout, self.plane))
         if self._state_due(readout.time_s):
-            self.send(hil_messages.hil_state_quaternion(readout, self.home))
+            self.send(hil_messages.hil_state_quaternion(readout, self.plane))
 
     def _state_due(self, t: float) -> bool:
         interval = self.state_interval_s

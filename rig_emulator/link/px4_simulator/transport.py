@@ -155,7 +155,7 @@ class TcpListener:
                 continue
             sock.setblocking(False)
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            return Connection(sock, lambda s=sock: s.recv(RECV_CHUNK), sock.send, sock.close,
+            return Connection(sock.fileno(), lambda s=sock: s.recv(RECV_CHUNK), sock.send, sock.close,
                               f"tcp:{addr[0]}:{addr[1]}")
 
     def close(self) -> None:

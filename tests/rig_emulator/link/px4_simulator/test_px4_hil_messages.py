@@ -10,13 +10,14 @@ import pytest
 from pymavlink.dialects.v20 import common
 
 from protocol.frames import mavlink_euler_from_quaternion, quaternion_from_rotation, rwb_from_paper_euler
-from protocol.geodesy import Home, global_to_local_enu
+from protocol.geodesy import Home, TangentPlane, global_to_local_enu
 from rig_emulator.link.px4_simulator import hil_messages, hil_units
 from rig_emulator.link.px4_simulator.transport import TransportError, parse_spec
 from rig_emulator.sensors.barometer import isa_pressure_temperature
 from rig_emulator.simulation.hil_readout import HilReadout, sampled_between
 
 HOME = Home(35.7, 51.4, 1200.0)
+PLANE = TangentPlane(HOME)
 
 
 def _readout(**kw) -> HilReadout:
@@ -58,7 +59,7 @@ def test_fields_updated_follow_the_samples(imu, mag, bits):
 
 def test_hil_gps_is_the_virtual_position_about_home():
     r = _readout()
-    m = _roundtrip(hil_messages.hil_gps(r, HOME))
+    m = _roundtrip(hil_messages.hil_gps(r, PLANE))
     enu = global_to_local_enu(HOME, m.lat * 1e-7, m.lon * 1e-7, m.alt * 1e-3)
     assert np.abs(enu - r.position).max() < 0.02  # degE7 is 1.1 cm
     assert (m.vn, m.ve, m.vd) == (-25, 50, -100)  # NED cm/s of ENU (0.5, -0.25, 1.0)
@@ -70,7 +71,7 @@ def test_hil_gps_is_the_virtual_position_about_home():
 
 def test_hil_state_quaternion_is_the_truth_in_ned():
     r = _readout()
-    m = _roundtrip(hil_messages.hil_state_quaternion(r, HOME))
+    m = _roundtrip(hil_messages.hil_state_quaternion(r, PLANE))
     roll, pitch, yaw = mavlink_euler_from_quaternion(m.attitude_quaternion)
     assert (roll, pitch, yaw) == pytest.approx((0.1, 0.2, math.pi / 2 - 0.3), abs=1e-6)  # (phi, -theta, pi/2 - psi)
     assert (m.rollspeed, m.pitchspeed, m.yawspeed) == pytest.approx((0.01, -0.02, 0.03), abs=1e-7)
