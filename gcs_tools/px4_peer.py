@@ -62,6 +62,7 @@ class Gains:
     alt_ki: float = 0.8
     filter_tau_s: float = 1.0  # complementary filter
     climb_tau_s: float = 0.05  # low-pass of the barometric climb rate
+    max_vertical_acc: float = 1.5  # m/s^2 (the rig's thrust-to-weight is 1.28)
 
 
 class HoverController:
@@ -105,6 +106,7 @@ class HoverController:
         err = self.altitude_m - self.alt
         self.integral = min(max(self.integral + err * dt, -2.0), 2.0)
         acc = g.alt_kp * err - g.alt_kd * self.climb + g.alt_ki * self.integral
+        acc = min(max(acc, -g.max_vertical_acc), g.max_vertical_acc)  # keep motor headroom for attitude
         tilt = max(math.cos(self.roll) * math.cos(self.pitch), 0.5)
         thrust = f.mass_kg * (f.gravity + acc) / tilt
         tx = f.inertia[0] * (-g.att_kp * self.roll - g.att_kd * s.xgyro)

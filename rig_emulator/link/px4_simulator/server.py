@@ -118,6 +118,9 @@ class Px4SimulatorServer:
             self._end_session()
 
     def _accept(self) -> None:
+        s = self.session
+        if s is not None and select.select([s.conn], [], [], 0)[0] and not s.on_readable():
+            self._end_session()  # the flight stack that is calling again has closed its old connection
         conn = self.transport.accept(busy=self.session is not None)
         if conn is not None:
             self._start_session(conn)

@@ -141,22 +141,20 @@ class TcpListener:
         return [self._sock]
 
     def accept(self, busy: bool) -> Connection | None:
-        """A new flight stack's connection, if one is waiting (refused while ``busy``)."""
-        while True:
-            try:
-                sock, addr = self._sock.accept()
-            except (BlockingIOError, InterruptedError):
-                return None
-            except OSError:
-                return None
-            if busy:
-                sock.close()
-                self.refused += 1
-                continue
-            sock.setblocking(False)
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            return Connection(sock.fileno(), lambda s=sock: s.recv(RECV_CHUNK), sock.send, sock.close,
-                              f"tcp:{addr[0]}:{addr[1]}")
+        """The next flight stack's connection, if one is waiting; while ``busy`` it is closed
+        at once (refused) and None returned. One connection per call."""
+        try:
+            sock, addr = self._sock.accept()
+        except OSError:  # nothing waiting (BlockingIOError) or a connection gone before it was accepted
+            return None
+        if busy:
+            sock.close()
+            self.refused += 1
+            return None
+        sock.setblocking(False)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        return Connection(sock.fileno(), lambda s=sock: s.recv(RECV_CHUNK), sock.send, sock.close,
+                          f"tcp:{addr[0]}:{addr[1]}")
 
     def close(self) -> None:
         self._sock.close()
