@@ -32,6 +32,8 @@ class Context:
     seed: int
     quick: bool
     out_dir: Path
+    controller: str = ""  # a controller plug-in to compare (exp_controller), 'package.module:Name'
+    strategy: str = "smc-flc"  # the loops the plug-in keeps
 
 
 @dataclass(frozen=True)

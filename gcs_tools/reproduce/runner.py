@@ -70,16 +70,32 @@ class _Live(threading.Thread):
 
 
 def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=None, only=None, quick: bool = False,
-              show_progress: bool = True, stream=None) -> Outcome:
-    """Run the selected experiments and write ``report.md``, ``results.json`` and the figures into ``out_dir``."""
+              show_progress: bool = True, stream=None, controller: str | None = None,
+              strategy: str = "smc-flc") -> Outcome:
+    """Run the selected experiments and write ``report.md``, ``results.json`` and the figures into ``out_dir``.
+
+    ``controller`` (``package.module:Name``): also run that controller plug-in next to the paper's
+    controllers (:mod:`gcs_tools.reproduce.exp_controller`), keeping the loops of ``strategy`` it
+    does not replace; without ``only`` that comparison is all that runs."""
     from rig_emulator.config.loader import ConfigError
     from rig_emulator.sweep import JobFailed, run_jobs
 
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise UsageError(f"--seed {seed!r}: must be an integer >= 0")
-    exps, with_stability = select(only)
+    if controller:
+        from gcs_tools.reproduce import exp_controller
+        from rig_emulator.controllers import PluginError, load_controller
+
+        try:
+            load_controller(controller)  # a plug-in that cannot load is a usage error, before anything runs
+        except PluginError as exc:
+            raise UsageError(f"--controller: {exc}") from None
+        exps, with_stability = select(only) if only else ([], False)
+        exps = [exp_controller] + exps
+    else:
+        exps, with_stability = select(only)
     out = prepare_out_dir(out_dir)
-    ctx = Context(seed=seed, quick=quick, out_dir=out)
+    ctx = Context(seed=seed, quick=quick, out_dir=out, controller=controller or "", strategy=strategy)
     jobs, spans = [], {}
     for exp in exps:
         mine = exp.jobs(ctx)
@@ -129,8 +145,9 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
     for exp in exps:
         a, b = spans[exp.NAME]
         sections.append(exp.analyse(ctx, results[a:b], live.get(exp.NAME)))
-    names = None if not only else [e.NAME for e in exps] + ([STABILITY] if with_stability else [])
-    files = report.write(out, sections, stab_md, stab, seed, quick, names)
+    names = None if not (only or controller) else [e.NAME for e in exps if e.NAME != "controller"] + (
+        [STABILITY] if with_stability else [])
+    files = report.write(out, sections, stab_md, stab, seed, quick, names, controller=controller, strategy=strategy)
     files += [out / name for s in sections for name in s.figures]
     return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results))
 
