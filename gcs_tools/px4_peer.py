@@ -63,6 +63,7 @@ class Gains:
     filter_tau_s: float = 1.0  # complementary filter
     climb_tau_s: float = 0.05  # low-pass of the barometric climb rate
     max_vertical_acc: float = 1.5  # m/s^2 (the rig's thrust-to-weight is 1.28)
+    integrate_within_m: float = 0.2  # altitude error below which the integral acts
 
 
 class HoverController:
@@ -104,7 +105,8 @@ class HoverController:
         """Motor outputs 0..1 for motors 1..4."""
         f, g = self.frame, self.gains
         err = self.altitude_m - self.alt
-        self.integral = min(max(self.integral + err * dt, -2.0), 2.0)
+        if abs(err) < g.integrate_within_m:  # no wind-up during the climb
+            self.integral = min(max(self.integral + err * dt, -2.0), 2.0)
         acc = g.alt_kp * err - g.alt_kd * self.climb + g.alt_ki * self.integral
         acc = min(max(acc, -g.max_vertical_acc), g.max_vertical_acc)  # keep motor headroom for attitude
         tilt = max(math.cos(self.roll) * math.cos(self.pitch), 0.5)

@@ -33,31 +33,28 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from rig_emulator.physics import state as S
-from rig_emulator.physics.rotation import quat_to_rot
 from rig_emulator.sensors.barometer import KELVIN_AT_0C, isa_altitude, isa_pressure_temperature
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class HilReadout:
     """One step's sensor readings and truth (SI; world ENU, body FRD)."""
 
     time_s: float
-    gyro: np.ndarray  # (3,) rad/s
-    accel: np.ndarray  # (3,) m/s^2, specific force including the virtual translation
-    mag: np.ndarray  # (3,) T
+    gyro: tuple  # (3,) rad/s
+    accel: tuple  # (3,) m/s^2, specific force including the virtual translation
+    mag: tuple  # (3,) T
     imu_sampled: bool
     mag_sampled: bool
     pressure_pa: float
     temperature_c: float
     baro_altitude_m: float  # altitude above mean sea level of the pressure read (ISA)
-    position: np.ndarray  # (3,) m, virtual, ENU about the local origin
-    velocity: np.ndarray  # (3,) m/s
-    acceleration: np.ndarray  # (3,) m/s^2, mean over the step
-    quaternion: np.ndarray  # (4,) (w, x, y, z) of R_WB, true
-    body_rates: np.ndarray  # (3,) rad/s, true omega_B
+    position: tuple  # (3,) m, virtual, ENU about the local origin
+    velocity: tuple  # (3,) m/s
+    acceleration: tuple  # (3,) m/s^2, mean over the step
+    quaternion: tuple  # (4,) (w, x, y, z) of R_WB, true
+    body_rates: tuple  # (3,) rad/s, true omega_B
 
 
 def sampled_between(k0: int, k1: int, decimation: int) -> bool:
@@ -69,42 +66,54 @@ def sampled_between(k0: int, k1: int, decimation: int) -> bool:
     return first < k1
 
 
-def hil_readout(sim, k_prev: int, velocity_prev: np.ndarray, home_alt_m: float) -> HilReadout:
+def _body_from_world(q, v):
+    """``R_WB^T v`` for the quaternion ``q`` (w, x, y, z) of R_WB, in plain floats."""
+    q0, q1, q2, q3 = q
+    a0, a1, a2 = v
+    return (
+        (1.0 - 2.0 * (q2 * q2 + q3 * q3)) * a0 + 2.0 * (q1 * q2 + q0 * q3) * a1 + 2.0 * (q1 * q3 - q0 * q2) * a2,
+        2.0 * (q1 * q2 - q0 * q3) * a0 + (1.0 - 2.0 * (q1 * q1 + q3 * q3)) * a1 + 2.0 * (q2 * q3 + q0 * q1) * a2,
+        2.0 * (q1 * q3 + q0 * q2) * a0 + 2.0 * (q2 * q3 - q0 * q1) * a1 + (1.0 - 2.0 * (q1 * q1 + q2 * q2)) * a2,
+    )
+
+
+def hil_readout(sim, k_prev: int, velocity_prev: tuple, home_alt_m: float) -> HilReadout:
     """The readout after the steps ``k_prev .. sim.k - 1`` (``velocity_prev``: the virtual
-    velocity at step ``k_prev``)."""
-    x = sim.x
-    R = np.empty((3, 3))
-    quat_to_rot(x[S.QUAT], x[S.QUAT + 1], x[S.QUAT + 2], x[S.QUAT + 3], R)
-    velocity = x[S.VEL:S.VEL + 3].copy()
+    velocity at step ``k_prev``). Plain floats (tuples): it runs at every flight-stack step."""
+    x = sim.x.tolist()
+    q = tuple(x[S.QUAT:S.QUAT + 4])
+    velocity = tuple(x[S.VEL:S.VEL + 3])
     period = (sim.k - k_prev) * sim.dt
-    accel_w = (velocity - velocity_prev) / period if period > 0.0 else np.zeros(3)
-    sp, ss = sim.sensing.params, sim.sensing.state
+    if period > 0.0:
+        accel_w = tuple((v1 - v0) / period for v1, v0 in zip(velocity, velocity_prev))
+    else:
+        accel_w = (0.0, 0.0, 0.0)
+    sp = sim.sensing.params
     if sp.simulate:
-        fused = ss.awork.combined  # [gyro, accel, mag] x axis, calibrated ensemble
-        gyro, f_modules, mag = fused[0].copy(), fused[1].copy(), fused[2].copy()
+        gyro, f_modules, mag = (tuple(row) for row in sim.sensing.state.awork.combined.tolist())
         imu = sp.suite.imu
         imu_new = sampled_between(k_prev, sim.k, imu.decim_inertial)
         mag_new = sampled_between(k_prev, sim.k, imu.decim_mag)
     else:
-        gyro = x[S.OMEGA:S.OMEGA + 3].copy()
-        f_modules = R.T @ np.array([0.0, 0.0, sim.pp.g])
-        mag = R.T @ sim.sensing.params.suite.imu.earth_field_W
+        gyro = tuple(x[S.OMEGA:S.OMEGA + 3])
+        f_modules = _body_from_world(q, (0.0, 0.0, sim.pp.g))
+        mag = _body_from_world(q, sp.suite.imu.earth_field_W.tolist())
         imu_new = mag_new = sim.k > k_prev
-    altitude = home_alt_m + float(x[S.POS + 2])
-    pressure, temperature_k = isa_pressure_temperature(altitude)
+    a_body = _body_from_world(q, accel_w)
+    pressure, temperature_k = isa_pressure_temperature(home_alt_m + x[S.POS + 2])
     return HilReadout(
         time_s=sim.k * sim.dt,
         gyro=gyro,
-        accel=f_modules + R.T @ accel_w,
+        accel=(f_modules[0] + a_body[0], f_modules[1] + a_body[1], f_modules[2] + a_body[2]),
         mag=mag,
         imu_sampled=bool(imu_new),
         mag_sampled=bool(mag_new),
         pressure_pa=pressure,
         temperature_c=temperature_k - KELVIN_AT_0C,
         baro_altitude_m=isa_altitude(pressure),
-        position=x[S.POS:S.POS + 3].copy(),
+        position=tuple(x[S.POS:S.POS + 3]),
         velocity=velocity,
         acceleration=accel_w,
-        quaternion=x[S.QUAT:S.QUAT + 4].copy(),
-        body_rates=x[S.OMEGA:S.OMEGA + 3].copy(),
+        quaternion=q,
+        body_rates=tuple(x[S.OMEGA:S.OMEGA + 3]),
     )

@@ -20,8 +20,6 @@ motors off, the same seed, so that every session of a flight stack is the same r
 
 from __future__ import annotations
 
-import numpy as np
-
 from rig_emulator.config.loader import ConfigError
 from rig_emulator.physics import state as S
 from rig_emulator.simulation.hil_readout import HilReadout, hil_readout
@@ -42,7 +40,7 @@ class LockstepPlant:
         self.rate_hz = float(rate_hz)
         self.steps_per_update = int(round(ratio))
         self.home_alt_m = float(home_alt_m)
-        self._velocity_prev = np.zeros(3)
+        self._velocity_prev = (0.0, 0.0, 0.0)
         self._armed = False
 
     @property
@@ -66,14 +64,17 @@ class LockstepPlant:
         sim.armed = False
         sim.warm_up()
         rig.sim = sim
-        self._velocity_prev = sim.x[S.VEL:S.VEL + 3].copy()
+        self._velocity_prev = tuple(sim.x[S.VEL:S.VEL + 3].tolist())
         self._armed = False
 
     def command(self, voltages, armed: bool) -> None:
         """Hold these motor voltage commands (V, motors 1..4) from the next step on (armed:
         the motor drivers are enabled; disarmed, the loop holds 0 V)."""
         sim = self.rig.sim
-        sim.set_motor_voltages(voltages)
+        v_cmd, v_max = sim.v_cmd, sim.pp.v_max
+        for i in range(4):  # sim.set_motor_voltages without its array checks: a call per step
+            v = voltages[i]
+            v_cmd[i] = 0.0 if not v > 0.0 else (v if v < v_max else v_max)
         if armed != self._armed:
             self._armed = armed
             sim.armed = armed

@@ -26,6 +26,7 @@ GPS_SPEED_UNKNOWN_BELOW_M_S = 0.01  # course over ground reported unknown below 
 #: HIL_GPS.time_usec is UTC (PX4 copies it to sensor_gps.time_utc_usec). Reading: simulated
 #: time from a fixed epoch, so that runs stay bit-identical: 2024-07-01T00:00:00Z.
 GPS_EPOCH_UNIX_S = 1719792000.0
+GPS_EPOCH_USEC = int(GPS_EPOCH_UNIX_S) * 1_000_000
 
 
 def fields_updated(readout) -> int:
@@ -46,7 +47,7 @@ def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False):
     ``all_fields`` flags every field (0x1FFF) whatever was sampled, as jMAVSim does."""
     a, g, m = readout.accel, readout.gyro, readout.mag
     return mavlink.MAVLink_hil_sensor_message(
-        time_usec=U.time_usec(readout.time_s),
+        time_usec=H.step_usec(readout.time_s),
         xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
         xgyro=float(g[0]), ygyro=float(g[1]), zgyro=float(g[2]),
         xmag=U.gauss(float(m[0])), ymag=U.gauss(float(m[1])), zmag=U.gauss(float(m[2])),
@@ -67,7 +68,7 @@ def hil_gps(readout, plane: TangentPlane):
     cog = U.heading_rad_to_cdeg(math.atan2(ve, vn)) if speed >= GPS_SPEED_UNKNOWN_BELOW_M_S else U.UINT16_UNKNOWN
     accuracy_cm = H.cm_u16(GPS_ACCURACY_M)
     return mavlink.MAVLink_hil_gps_message(
-        time_usec=U.unix_usec(GPS_EPOCH_UNIX_S + readout.time_s), fix_type=mavlink.GPS_FIX_TYPE_3D_FIX,
+        time_usec=GPS_EPOCH_USEC + H.step_usec(readout.time_s), fix_type=mavlink.GPS_FIX_TYPE_3D_FIX,
         lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt), eph=accuracy_cm, epv=accuracy_cm,
         vel=U.cm_s_u16(speed), vn=U.cm_s_i16(vn), ve=U.cm_s_i16(ve), vd=U.cm_s_i16(vd), cog=cog,
         satellites_visible=GPS_SATELLITES, id=0, yaw=0)
@@ -84,7 +85,7 @@ def hil_state_quaternion(readout, plane: TangentPlane):
     p, q, r = (float(v) for v in readout.body_rates)
     speed = math.sqrt(vn * vn + ve * ve + vd * vd)
     return mavlink.MAVLink_hil_state_quaternion_message(
-        time_usec=U.time_usec(readout.time_s), attitude_quaternion=[w, x, y, z],
+        time_usec=H.step_usec(readout.time_s), attitude_quaternion=[w, x, y, z],
         rollspeed=p, pitchspeed=q, yawspeed=r, lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt),
         vx=U.cm_s_i16(vn), vy=U.cm_s_i16(ve), vz=U.cm_s_i16(vd),
         ind_airspeed=U.cm_s_u16(speed), true_airspeed=U.cm_s_u16(speed),

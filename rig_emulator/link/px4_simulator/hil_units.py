@@ -25,6 +25,12 @@ MODE_FLAG_SAFETY_ARMED = 128
 FLAG_LOCKSTEP = 1
 
 
+def step_usec(t_s: float) -> int:
+    """Simulated seconds (a whole number of physics steps, k dt) -> microseconds, rounded:
+    consecutive 4 ms steps stay exactly 4000 us apart (truncating 0.007 s would give 6999)."""
+    return int(round(t_s * 1e6))
+
+
 def hpa(pressure_pa: float) -> float:
     """Pascal -> hectopascal (HIL_SENSOR.abs_pressure, diff_pressure)."""
     return pressure_pa / PA_PER_HPA

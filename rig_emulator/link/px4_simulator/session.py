@@ -151,15 +151,16 @@ class SimulatorSession:
         return max((target - self._sim0) / self.speedup - (now - self._wall0), 0.0)
 
     def step(self) -> None:
-        """Advance the plant one step and send that step's messages."""
+        """Advance the plant one step and send that step's messages (in one write)."""
         readout = self.plant.advance()
         self.steps += 1
         self.counters.steps += self.plant.steps_per_update
-        self.send(hil_messages.hil_sensor(readout, all_fields=self.all_fields))
+        out = [self._pack(hil_messages.hil_sensor(readout, all_fields=self.all_fields))]
         if self.steps % self.gps_div == 0:
-            self.send(hil_messages.hil_gps(readout, self.plane))
+            out.append(self._pack(hil_messages.hil_gps(readout, self.plane)))
         if self._state_due(readout.time_s):
-            self.send(hil_messages.hil_state_quaternion(readout, self.plane))
+            out.append(self._pack(hil_messages.hil_state_quaternion(readout, self.plane)))
+        self._write(out)
 
     def _state_due(self, t: float) -> bool:
         interval = self.state_interval_s
@@ -172,16 +173,20 @@ class SimulatorSession:
             self._next_state_t = t + interval
         return True
 
-    def send(self, msg) -> None:
-        if not self.conn.open:
-            return
+    def _pack(self, msg) -> bytes:
         try:
             buf = msg.pack(self.mav)
         except OverflowError:  # a diverged plant: beyond float32 goes as +-inf
             buf = saturate_floats(msg).pack(self.mav)
         self.mav.seq = (self.mav.seq + 1) % 256
-        if self.conn.write(bytes(buf)):
-            self.counters.sent += 1
+        return buf
+
+    def _write(self, packed: list) -> None:
+        if self.conn.open and self.conn.write(b"".join(packed)):
+            self.counters.sent += len(packed)
+
+    def send(self, msg) -> None:
+        self._write([self._pack(msg)])
 
     def close(self) -> None:
         """End the session: motors off, stream closed."""
