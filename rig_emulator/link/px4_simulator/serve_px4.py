@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from rig_emulator.config.loader import ConfigError
-from rig_emulator.link.px4_simulator.transport import DEFAULT_HOST, DEFAULT_PORT, TransportError, open_transport
+from rig_emulator.link.px4_simulator.transport import DEFAULT_HOST, DEFAULT_PORT, TransportError, open_transport, parse_spec
 
 DEFAULT_RATE_HZ = 250.0
 
@@ -25,8 +25,24 @@ def add_px4_args(p: argparse.ArgumentParser) -> None:
                         "only the sensors that sampled during the step")
 
 
-def serve_px4(args, ground, rig, log) -> None:
-    """Run the rig as the flight stack's simulator (after the ground link ``ground`` is up)."""
+def check_px4_args(args) -> None:
+    """Options that do not go with ``--px4-simulator`` (or need it), refused before the rig is built."""
+    if not getattr(args, "px4_simulator", None):
+        return
+    for flag, value in (("--start-paused", args.start_paused), ("--timing-log", args.timing_log)):
+        if value:
+            raise ConfigError(f"{flag} does not apply with --px4-simulator: the flight stack steps the plant")
+    if not (args.px4_rate > 0.0 and args.px4_rate < 1e6):
+        raise ConfigError(f"--px4-rate {args.px4_rate:g}: must be > 0")
+    try:
+        parse_spec(args.px4_simulator)
+    except TransportError as exc:
+        raise ConfigError(str(exc)) from exc
+
+
+def serve_px4(args, ground, rig, log):
+    """The rig as the flight stack's simulator (:class:`Px4SimulatorServer`; the ground link
+    ``ground`` is up already); the caller runs and closes it."""
     from rig_emulator.link.px4_simulator.server import Px4SimulatorServer
     from rig_emulator.simulation.lockstep import LockstepPlant
 
