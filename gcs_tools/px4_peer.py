@@ -42,7 +42,7 @@ FLAG_LOCKSTEP = 1
 
 @dataclass
 class Airframe:
-    """The rig as its documentation gives it (docs/LOCKSTEP.md): a plus frame."""
+    """The rig as its documentation gives it (docs/YOUR_CONTROLLER.md, section 7.3): a plus frame."""
 
     mass_kg: float = 2.23
     inertia: tuple = (6.2e-2, 6.2e-2, 1.16e-1)
