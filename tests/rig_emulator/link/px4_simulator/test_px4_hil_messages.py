@@ -105,3 +105,16 @@ def test_parse_spec(text, spec):
 def test_parse_spec_rejects(text):
     with pytest.raises(TransportError, match="--px4-simulator"):
         parse_spec(text)
+
+
+@pytest.mark.parametrize("rate", [300.0, 2000.0, 0.0, -250.0])
+def test_lockstep_rate_must_divide_the_physics_rate(rate):
+    from types import SimpleNamespace
+
+    from rig_emulator.config.loader import ConfigError
+    from rig_emulator.simulation.lockstep import LockstepPlant
+
+    rig = SimpleNamespace(cfg={"sim.physics_rate_hz": 1000.0}, dt=0.001)
+    with pytest.raises(ConfigError, match="--px4-rate"):
+        LockstepPlant(rig, rate, 1200.0)
+    assert LockstepPlant(rig, 250.0, 1200.0).steps_per_update == 4
