@@ -23,9 +23,9 @@ from rig_emulator.link.testing import connect, recv
 from rig_emulator.simulation.lockstep import LockstepPlant
 
 HOME = Home(35.7, 51.4, 1200.0)
-#: free run before lockstep at 1/50 of real time: one sensor step every 0.2 s of wall time
+#: free run before lockstep at 1/100 of real time: one sensor step every 0.4 s of wall time
 #: until the peer's first answer, so that its first answer always comes after the first step
-FREE_RUN_SPEEDUP = 0.02
+FREE_RUN_SPEEDUP = 0.01
 
 
 class Px4Rig:
