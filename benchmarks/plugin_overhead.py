@@ -1,10 +1,11 @@
 """What the controller plug-in machinery costs a run without a plug-in: an A/B of two source trees.
 
-``python -m benchmarks.plugin_overhead [--base COMMIT] [--repeat N] [--duration S]`` exports
-``COMMIT`` (default: the commit before the plug-in machinery, 3f19de9) with ``git archive``
-into a temporary directory and runs, alternately in fresh processes, the same probe on that
-tree and on this checkout (``PYTHONPATH`` selects the tree; each tree gets its own numba cache
-directory, empty at the start, so repetition 1 of each is a cold compile):
+``python -m benchmarks.plugin_overhead [--base COMMIT] [--this COMMIT] [--repeat N] [--duration S]``
+exports ``--base`` (default: the commit before the plug-in machinery, 3f19de9) and ``--this``
+(default ``HEAD``) with ``git archive`` into a temporary directory and runs, alternately in
+fresh processes, the same probe on the two trees (``PYTHONPATH`` selects the tree; each tree
+gets its own numba cache directory, empty at the start, so repetition 1 of each is a cold
+compile):
 
 * **cold compile**: wall time of the first ``simulate("helix", "smc-flc", 0.01 s)`` in a
   process whose cache is empty (import excluded) - the issue allows the plug-in machinery
@@ -53,7 +54,8 @@ print(json.dumps(out))
 
 
 def _export(commit: str, repo: Path, dest: Path) -> Path:
-    tar = dest / "base.tar"
+    dest.mkdir()
+    tar = dest / "tree.tar"
     with open(tar, "wb") as f:
         subprocess.run(["git", "-C", str(repo), "archive", commit], stdout=f, check=True)
     tree = dest / "tree"
@@ -75,6 +77,7 @@ def _run(tree: Path, cache: Path, duration: float) -> dict:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.plugin_overhead", description=__doc__.split("\n\n")[0])
     ap.add_argument("--base", default=BASE, help="the commit to compare with (default %(default)s)")
+    ap.add_argument("--this", default="HEAD", help="the commit measured (default %(default)s)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--duration", type=float, default=20.0, help="simulated s per steady-state call")
     ap.add_argument("--out", help="write the raw runs as JSON")
@@ -83,7 +86,7 @@ def main(argv=None) -> int:
     runs = {"base": [], "this": []}
     with tempfile.TemporaryDirectory(prefix="hilms-ab-") as tmp:
         tmp = Path(tmp)
-        trees = {"base": _export(args.base, repo, tmp), "this": repo}
+        trees = {"base": _export(args.base, repo, tmp / "base"), "this": _export(args.this, repo, tmp / "this")}
         for rep in range(args.repeat):
             for name in (("base", "this") if rep % 2 == 0 else ("this", "base")):
                 r = _run(trees[name], tmp / f"cache-{name}", args.duration)
@@ -92,7 +95,7 @@ def main(argv=None) -> int:
                       file=sys.stderr, flush=True)
     with open("/proc/loadavg") if os.path.exists("/proc/loadavg") else open(os.devnull) as f:
         load = f.read().strip()
-    print(f"A/B: this checkout vs {args.base}, {args.repeat} repetitions, load average {load}")
+    print(f"A/B: {args.this} vs {args.base}, {args.repeat} repetitions, load average {load}")
     cold = runs["this"][0]["first_call_s"] / runs["base"][0]["first_call_s"]
     print(f"cold compile + first call: {runs['this'][0]['first_call_s']:.1f} s vs {runs['base'][0]['first_call_s']:.1f} s"
           f" (ratio {cold:.3f}; target <= 1.10)")

@@ -146,7 +146,10 @@ def _controller_label(cfg, strategy: str) -> str:
 def cmd_serve(args) -> int:
     from rig_emulator.link.serve import cmd_serve as serve
 
-    return serve(args, _overrides(args))
+    overrides = _overrides(args)
+    if args.controller:
+        overrides["controller.plugin"] = args.controller
+    return serve(args, overrides)
 
 
 def cmd_calibrate(args) -> int:
@@ -201,6 +204,9 @@ def build_parser() -> argparse.ArgumentParser:
                                      "the mission in ./rig-state; optional MAVLink 2 signing (see serve --help)")
     add_serve_args(p)
     _add_config_args(p)
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="fly a controller plug-in instead of (part of) the strategy; its parameters are served "
+                        "under its prefix; a failing plug-in trips the failsafe (docs/YOUR_CONTROLLER.md)")
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser("simulate", help="run a scenario headless and print the mean errors")

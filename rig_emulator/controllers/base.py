@@ -187,9 +187,10 @@ class CompiledController(Controller):
         self.state = np.zeros(max(1, int(self.state_size)))
 
     def update(self, t, obs):
-        """The kernel run as plain Python (numba's ``py_func``), for the Python call path."""
+        """The kernel run as plain Python (numba's ``py_func``, and so are the compiled helpers it
+        calls), for the Python call path."""
         out = np.full(PL.OUT_SIZE, math.nan)
-        rc = type(self).kernel.py_func(t, obs.array, self.params.array, self.state, out)
+        rc = _as_python(type(self).kernel)(t, obs.array, self.params.array, self.state, out)
         if rc:
             raise RuntimeError(f"kernel returned error code {int(rc)}")
         return Command(out[PL.C_CMD:PL.C_CMD + 4], out[PL.C_ATT_DES:PL.C_ATT_DES + 3],
@@ -197,3 +198,27 @@ class CompiledController(Controller):
 
     def reset(self) -> None:
         self.state[:] = 0.0
+
+
+_PYTHON: dict = {}  # numba dispatcher -> its plain-Python function calling plain-Python helpers
+
+
+def _as_python(dispatcher):
+    """``dispatcher.py_func`` with every numba function it refers to (its globals and closure,
+    recursively) replaced by that function's own plain-Python version."""
+    fn = _PYTHON.get(dispatcher)
+    if fn is not None:
+        return fn
+    import types
+
+    from numba.core.registry import CPUDispatcher
+
+    py = dispatcher.py_func
+    glb = dict(py.__globals__)
+    fn = types.FunctionType(py.__code__, glb, py.__name__, py.__defaults__, py.__closure__)
+    _PYTHON[dispatcher] = fn  # before recursing: a kernel may call itself
+    for name in py.__code__.co_names:
+        value = glb.get(name)
+        if isinstance(value, CPUDispatcher):
+            glb[name] = _as_python(value)
+    return fn

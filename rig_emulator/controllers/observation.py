@@ -81,8 +81,8 @@ class Observation:
                      "attitude_rate_target", "attitude_acc_target", "true_position", "true_velocity",
                      "true_quaternion", "true_body_rates", "imu_raw", "cell_raw", "inertia"):
             getattr(self, name).flags.writeable = False
-        for v in vars(self.reference).values():
-            if isinstance(v, np.ndarray):
+        for k, v in vars(self.reference).items():
+            if isinstance(v, np.ndarray) and k != "_a":  # the views only: the loop writes the array itself
                 v.flags.writeable = False
 
     def _f(self, i: int) -> float:

@@ -257,8 +257,8 @@ class LiveRig:
         return self.sim.fault_status()
 
     def fault_signature(self) -> tuple:
-        """Changes whenever :meth:`fault_status` may have changed (cheap: for pollers)."""
-        return len(self.sim.faults.events), self.sim.us.flags.tobytes()
+        """Changes whenever :meth:`fault_status` or :attr:`plugin_failure` may have changed (cheap: for pollers)."""
+        return len(self.sim.faults.events), self.sim.us.flags.tobytes(), id(self.sim.plugin_failure)
 
     def fault_events(self, since: int = 0) -> list[FaultEvent]:
         """Every fault injection (config or command) from number ``since`` on, oldest first."""

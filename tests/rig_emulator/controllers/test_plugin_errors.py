@@ -10,16 +10,18 @@ from rig_emulator import cli
 from rig_emulator.api import simulate
 from rig_emulator.control import plugin_layout as L
 from rig_emulator.controllers import CompiledController, Controller, PluginError, load_controller
+from rig_emulator.controllers.examples.hover import LevelHover
 
 
 class Hover(Controller):
-    """Holds nothing in particular: u1 = m g, no torque (enough to fly a few seconds)."""
+    """u1 = m g, no torque: flies only a moment before the loss-of-control failsafe (enough for
+    the failures at the first calls)."""
 
     def update(self, t, obs):
         return (obs.mass * obs.gravity, 0.0, 0.0, 0.0)
 
 
-class RaisesAt3(Hover):
+class RaisesAt3(LevelHover):  # holds the rig level until it fails
     def update(self, t, obs):
         if t >= 3.0:
             raise ZeroDivisionError("my gain schedule divided by zero")
@@ -31,9 +33,10 @@ class ThreeNumbers(Hover):
         return (1.0, 2.0, 3.0)
 
 
-class NaNAt1(Hover):
+class NaNAt1(LevelHover):
     def update(self, t, obs):
-        return (math.nan if t >= 1.0 else obs.mass * obs.gravity, 0.0, 0.0, 0.0)
+        f = super().update(t, obs)
+        return (math.nan if t >= 1.0 else f[0], f[1], f[2], f[3])
 
 
 @numba.njit
@@ -49,7 +52,7 @@ class CompiledFails(CompiledController):
 
 
 def _fly(ctrl, duration=4.0):
-    return simulate("hover", duration=duration, controller=ctrl, seed=1, sensors__calibration="none")
+    return simulate("hover", duration=duration, controller=ctrl, seed=1)
 
 
 def test_exception_at_3s_names_plugin_time_and_problem():
@@ -67,7 +70,8 @@ def test_wrong_return_shape():
 
 
 def test_nan_command():
-    with pytest.raises(PluginError, match=r"NaNAt1 at t = 1\.000 s: returned a non-finite command \[nan, 0, 0, 0\]"):
+    with pytest.raises(PluginError, match=r"NaNAt1 at t = 1\.000 s: returned a non-finite command \[nan, [0-9.]+, "
+                                          r"[0-9.]+, [0-9.]+\] \(motor thrusts 1-4 \(N\)\)"):
         _fly(NaNAt1, 2.0)
 
 
@@ -101,15 +105,15 @@ def test_import_and_declaration_errors():
 
 def test_cli_exit_2_with_the_message(tmp_path, monkeypatch, capsys):
     (tmp_path / "my_bad_plugin.py").write_text(
-        "from rig_emulator.controllers import Controller\n"
-        "class Boom(Controller):\n"
+        "from rig_emulator.controllers.examples.hover import LevelHover\n"
+        "class Boom(LevelHover):\n"
         "    def update(self, t, obs):\n"
         "        if t >= 3.0:\n"
         "            raise RuntimeError('boom')\n"
-        "        return (obs.mass * obs.gravity, 0.0, 0.0, 0.0)\n")
+        "        return super().update(t, obs)\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    code = cli.main(["simulate", "--scenario", "hover", "--duration", "4", "--controller", "my_bad_plugin:Boom",
-                     "--set", "sensors.calibration=\"none\""])
+    code = cli.main(["simulate", "--scenario", "hover", "--duration", "4", "--seed", "1", "--controller",
+                     "my_bad_plugin:Boom"])
     err = capsys.readouterr().err
     assert code == 2
     assert "controller my_bad_plugin:Boom at t = 3.000 s: RuntimeError: boom" in err
@@ -121,8 +125,7 @@ def test_failure_disarms_and_arming_clears_it():
     from rig_emulator.config.loader import load_config
     from rig_emulator.simulation.run import Simulation
 
-    sim = Simulation(load_config(scenario="hover", overrides={"sim.duration": 4.0, "sensors.calibration": "none"}),
-                     controller=NaNAt1)
+    sim = Simulation(load_config(scenario="hover", overrides={"sim.duration": 4.0, "sim.seed": 1}), controller=NaNAt1)
     sim.advance(1500)
     assert not sim.armed and sim.plugin_failure is not None and sim.plugin_failure.time_s == pytest.approx(1.0)
     assert np.all(sim.v_cmd == 0.0)
