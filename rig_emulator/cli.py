@@ -1,13 +1,14 @@
 """``rig-emulator``: the rig's command line.
 
 * ``rig-emulator simulate --scenario NAME --strategy NAME --duration S --seed N [--out FILE]``
-  runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors.
+  runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors;
+  ``--controller package.module:Name`` flies a controller plug-in (docs/YOUR_CONTROLLER.md).
 * ``rig-emulator params [--scenario NAME]`` lists every parameter with its value, unit and range.
 * ``rig-emulator scenarios`` lists the scenario and airframe presets.
 * ``rig-emulator serve [--mavlink URL ...] [--speedup X] ...`` (also ``rig-emulator`` with no
   subcommand) runs the rig and serves MAVLink (see :mod:`rig_emulator.link.serve`).
 
-Exit codes: 0 success, 2 bad arguments or configuration.
+Exit codes: 0 success, 2 bad arguments or configuration, or a controller plug-in that failed.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np
 from protocol.mean_error import PAPER_TABLE_6, format_table
 from rig_emulator.config.loader import ConfigError, available, load_config, parse_override
 from rig_emulator.config.schema import SCHEMA, STRATEGIES
+from rig_emulator.controllers.base import PluginError
 from rig_emulator.link.serve_args import add_serve_args
 
 
@@ -93,21 +95,25 @@ def cmd_simulate(args) -> int:
         overrides["sim.duration"] = args.duration
     if args.omega is not None:
         overrides["guidance.omega"] = args.omega
+    if args.controller:
+        overrides["controller.plugin"] = args.controller
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
     sim = Simulation(cfg)
     result = sim.run()
     errors = result.mean_errors()
-    rows = {f"{args.strategy} ({args.airframe})": errors}
-    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" else None
+    label = f"{_controller_label(cfg, args.strategy)} ({args.airframe})"
+    rows = {label: errors}
+    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" and not cfg["controller.plugin"] else None
     if paper is not None:
         rows[f"paper {args.strategy}"] = paper
     if args.json:
         print(json.dumps({"scenario": args.scenario, "strategy": args.strategy, "seed": args.seed,
+                          "controller": cfg["controller.plugin"] or None,
                           "mean_errors": {k: (None if not math.isfinite(v) else v) for k, v in errors.items()},
                           "sim_time_s": result.sim_time_s, "wall_time_s": result.wall_time_s,
                           "real_time_factor": result.real_time_factor, "failsafe": _failsafe_summary(result)}))
     else:
-        print(f"scenario {args.scenario}, strategy {args.strategy}, seed {args.seed}: "
+        print(f"scenario {args.scenario}, {label}, seed {args.seed}: "
               f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
         print(f"mean errors (Eq. 45) on the plant {args.airframe!r}"
               + (" (the hardware rig; --airframe hilms-ideal for the ideal plant)" if args.airframe == "hilms" else "")
@@ -131,10 +137,25 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def _controller_label(cfg, strategy: str) -> str:
+    """Who flew: the strategy, or the plug-in and what of the strategy it kept."""
+    plugin = cfg["controller.plugin"]
+    if not plugin:
+        return f"strategy {strategy}"
+    from rig_emulator.controllers import load_controller
+
+    replaces = load_controller(plugin).replaces
+    kept = {"both": "", "attitude": f" + position loop of {strategy}", "position": f" + attitude loop of {strategy}"}
+    return f"controller {plugin}{kept[replaces]}"
+
+
 def cmd_serve(args) -> int:
     from rig_emulator.link.serve import cmd_serve as serve
 
-    return serve(args, _overrides(args))
+    overrides = _overrides(args)
+    if args.controller:
+        overrides["controller.plugin"] = args.controller
+    return serve(args, overrides)
 
 
 def cmd_calibrate(args) -> int:
@@ -189,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
                                      "the mission in ./rig-state; optional MAVLink 2 signing (see serve --help)")
     add_serve_args(p)
     _add_config_args(p)
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="fly a controller plug-in instead of (part of) the strategy; its parameters are served "
+                        "under its prefix; a failing plug-in trips the failsafe (docs/YOUR_CONTROLLER.md)")
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser("simulate", help="run a scenario headless and print the mean errors")
@@ -197,6 +221,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--omega", type=float, help="harmonic frequency in rad/s (Eq. 44)")
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="fly a controller plug-in instead of (part of) the strategy (docs/YOUR_CONTROLLER.md)")
     p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     _add_config_args(p)
@@ -227,7 +253,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except ConfigError as exc:
+    except (ConfigError, PluginError) as exc:
         print(f"rig-emulator: error: {exc}", file=sys.stderr)
         return 2
 

@@ -73,7 +73,8 @@ class _Live(threading.Thread):
 
 def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=None, only=None, quick: bool = False,
               show_progress: bool = True, stream=None, plants=PLANTS, seeds: int = SEEDS,
-              overrides=None, live: bool = True) -> Outcome:
+              overrides=None, live: bool = True, controller: str | None = None,
+              strategy: str = "smc-flc") -> Outcome:
     """Run the selected experiments and write ``report.md``, ``results.json`` and the figures into ``out_dir``.
 
     Every experiment runs on each plant of ``plants`` (airframe presets; default the hardware
@@ -82,6 +83,10 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
     figures and the MAVLink flight are the first plant's first seed; the other runs' figures go
     to ``DIR/runs/PLANT-seedN/`` and their rectangle is the headless twin (``live=False``: the
     first one's too, no rig process).
+
+    ``controller`` (``package.module:Name``): also run that controller plug-in next to the paper's
+    controllers (:mod:`gcs_tools.reproduce.exp_controller`), keeping the loops of ``strategy`` it
+    does not replace; without ``only`` that comparison is all that runs.
     """
     from rig_emulator.config.loader import ConfigError
     from rig_emulator.sweep import JobFailed, run_jobs
@@ -105,7 +110,18 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
             check_config(plant, None, overrides or None)
         except ConfigError as exc:
             raise UsageError(f"--set: {exc}") from None
-    exps, with_stability = select(only)
+    if controller:
+        from gcs_tools.reproduce import exp_controller
+        from rig_emulator.controllers import PluginError, load_controller
+
+        try:
+            load_controller(controller)  # a plug-in that cannot load is a usage error, before anything runs
+        except PluginError as exc:
+            raise UsageError(f"--controller: {exc}") from None
+        exps, with_stability = select(only) if only else ([], False)
+        exps = [exp_controller] + exps
+    else:
+        exps, with_stability = select(only)
     out = prepare_out_dir(out_dir)
     pairs = tuple(sorted((overrides or {}).items()))
     contexts = []
@@ -113,7 +129,8 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
         for s in range(seed, seed + seeds):
             primary = not contexts
             where = out if primary else out / "runs" / f"{plant}-seed{s}"
-            contexts.append(Context(seed=s, quick=quick, out_dir=where, airframe=plant, overrides=pairs))
+            contexts.append(Context(seed=s, quick=quick, out_dir=where, airframe=plant, overrides=pairs,
+                                    controller=controller or "", strategy=strategy))
     main = contexts[0]
     jobs, spans = [], {}
     for i, ctx in enumerate(contexts):  # contexts are keyed by position (their overrides may hold lists)
@@ -180,8 +197,10 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
     columns = [PlantRuns(plant, plant, pairs, {c.seed: by_ctx[i] for i, c in enumerate(contexts) if c.airframe == plant})
                for plant in plants]
     sections = by_ctx[0]
-    names = None if not only else [e.NAME for e in exps] + ([STABILITY] if with_stability else [])
-    files = report.write(out, sections, stab_md, stab, seed, quick, names, columns=columns, n_seeds=seeds)
+    names = None if not (only or controller) else [e.NAME for e in exps if e.NAME != "controller"] + (
+        [STABILITY] if with_stability else [])
+    files = report.write(out, sections, stab_md, stab, seed, quick, names, columns=columns, n_seeds=seeds,
+                         controller=controller, strategy=strategy)
     files += [out / name for s in sections for name in s.figures]
     files += [c.out_dir / name for i, c in enumerate(contexts) if i > 0 for s in by_ctx[i] for name in s.figures]
     return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results),

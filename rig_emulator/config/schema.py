@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 @dataclass(frozen=True)
 class Spec:
-    """One parameter: ``kind`` is float, int, str, bool, vec3, floats or table_list."""
+    """One parameter: ``kind`` is float, int, str, bool, vec3, floats, table_list, tree or params (name -> numbers)."""
 
     kind: str
     doc: str
@@ -95,6 +95,11 @@ SCHEMA: dict[str, Spec] = {
     "motors.esc_deadband_v": F("ESC dead-band: voltage commands below this give 0 V (0 = none)", "V", 0.0, 10.0),
     # --- control ---------------------------------------------------------------------------
     "control.strategy": S("controller strategy", STRATEGIES),
+    "controller.plugin": Spec("str", "controller plug-in 'package.module:Name' flying instead of (part of) the strategy "
+                                     "(docs/YOUR_CONTROLLER.md); empty: the built-in strategy alone"),
+    "controller.params": Spec("params", "the plug-in's own parameters (name = number or list of numbers) over its defaults"),
+    "controller.call": S("how a compiled plug-in runs: 'compiled' (inside the compiled loop) or 'python' (its kernel as "
+                         "plain Python, e.g. to debug it)", ("compiled", "python")),
     "control.max_tilt_deg": F("tilt limit of the Eq. 35 singularity guard", "deg", 1.0, 80.0),
     "control.reference_time_constant": F(
         "time constant of the filter that gives desired-attitude rates and accelerations", "s", 0.0, 1.0, lo_open=True

@@ -56,7 +56,27 @@ OUT_SIZE = 20
 
 @jit(nrt=False)
 def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, ref, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
-    """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays."""
+    """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays.
+
+    The three stages below are also the seams a controller plug-in replaces
+    (:mod:`rig_emulator.control.plugin_step`): :func:`position_stage` (position law to an
+    attitude target and u1), :func:`attitude_stage` (attitude law to Euler-frame torques) and
+    :func:`actuate` (allocation and Eq. 40 inverse).
+    """
+    u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(dt, pos, vel, phi, theta, ref, cp, cstate, cout)
+    attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
+                   cp, cstate, e3, de3, acc3, s3, tau3)
+    u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
+    return actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd)
+
+
+@jit(nrt=False)
+def position_stage(dt, pos, vel, phi, theta, ref, cp, cstate, cout):
+    """Position law (or, in attitude mode, the guidance's attitude references and u1 = m g).
+
+    Returns (u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags): the collective thrust and the
+    shaped attitude references (value, rate, acceleration per Euler angle).
+    """
     flags = 0
     if ref[REF_MODE] == MODE_POSITION:
         ex = ref[REF_POS] - pos[0]
@@ -98,13 +118,7 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
         psi_d = ref[REF_YAW]
         phi_d, theta_d, tilt_flags = desired_tilt(ux, uy, psi_d, cp.max_tilt)
         flags |= tilt_flags
-        if cstate[CS_STARTED] == 0.0:
-            cstate[CS_FILTER + 0] = phi_d
-            cstate[CS_FILTER + 2] = theta_d
-            cstate[CS_FILTER + 4] = psi_d
-        r0, dr0, a0 = reference_step(phi_d, cstate, 0, cp.ref_omega, dt, False)
-        r1, dr1, a1 = reference_step(theta_d, cstate, 1, cp.ref_omega, dt, False)
-        r2, dr2, a2 = reference_step(psi_d, cstate, 2, cp.ref_omega, dt, True)
+        r0, dr0, a0, r1, dr1, a1, r2, dr2, a2 = shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate)
     else:
         u1 = cp.mass * cp.g
         cout[OUT_UXY] = 0.0
@@ -119,7 +133,27 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
         a1 = ref[REF_ATT_ACC + 1]
         a2 = ref[REF_ATT_ACC + 2]
     cstate[CS_STARTED] = 1.0
+    return u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags
 
+
+@jit(inline="always")
+def shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate):
+    """The reference filters (control/reference_filter.py) on a desired attitude; started on
+    the target at the first update after arming. Returns (r, dr, a) per Euler angle."""
+    if cstate[CS_STARTED] == 0.0:
+        cstate[CS_FILTER + 0] = phi_d
+        cstate[CS_FILTER + 2] = theta_d
+        cstate[CS_FILTER + 4] = psi_d
+    r0, dr0, a0 = reference_step(phi_d, cstate, 0, cp.ref_omega, dt, False)
+    r1, dr1, a1 = reference_step(theta_d, cstate, 1, cp.ref_omega, dt, False)
+    r2, dr2, a2 = reference_step(psi_d, cstate, 2, cp.ref_omega, dt, True)
+    return r0, dr0, a0, r1, dr1, a1, r2, dr2, a2
+
+
+@jit(nrt=False)
+def attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
+                   cp, cstate, e3, de3, acc3, s3, tau3):
+    """Attitude law: Euler-frame torques into ``tau3``, sliding surfaces into ``s3``."""
     e3[0] = r0 - phi
     e3[1] = r1 - theta
     e3[2] = wrap_angle(r2 - psi)
@@ -149,7 +183,11 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
             tau3[1] = cp.iyy * pid_axis(e3[1], de3[1], a1, cp.pida_kp[1], cp.pida_ki[1], cp.pida_kd[1], integ, 1, dt, cp.pid_limit)
             tau3[2] = cp.izz * pid_axis(e3[2], de3[2], a2, cp.pida_kp[2], cp.pida_ki[2], cp.pida_kd[2], integ, 2, dt, cp.pid_limit)
 
-    u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
+
+@jit(nrt=False)
+def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd):
+    """Allocation (A6 inverse) of (u1 N, u2..u4 N m about the body axes) to motor thrusts and
+    voltages; records what was decided in ``cout``. Returns the flags."""
     forces = cout[OUT_THRUST_CMD : OUT_THRUST_CMD + 4]
     flags |= allocate(u1, u2, u3, u4, cp.arm_length, cp.km_over_kf, cp.f_max, forces)
     for i in range(4):

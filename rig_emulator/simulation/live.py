@@ -24,7 +24,8 @@ from rig_emulator.simulation.faults import FaultEvent, FaultStatus
 from rig_emulator.simulation.run import Simulation
 
 # keys that fix array sizes or rates of a running rig
-_RESTART_ONLY = ("sim.physics_rate_hz", "sim.control_rate_hz", "sim.log_rate_hz", "sim.seed")
+_RESTART_ONLY = ("sim.physics_rate_hz", "sim.control_rate_hz", "sim.log_rate_hz", "sim.seed", "controller.plugin",
+                 "controller.call")
 
 
 _GUIDANCE_NAMES = {0: "hover", 1: "attitude", 2: "helix", 3: "waypoints"}
@@ -160,8 +161,10 @@ class LiveRig:
     exactly as it was.
     """
 
-    def __init__(self, cfg: RigConfig, chunk_steps_max: int = 10_000):
-        self.sim = Simulation(cfg, log_capacity=chunk_steps_max + 1)
+    def __init__(self, cfg: RigConfig, chunk_steps_max: int = 10_000, controller=None, external_motors: bool = False):
+        """``controller``, ``external_motors``: see :class:`~rig_emulator.simulation.run.Simulation`."""
+        self.sim = Simulation(cfg, log_capacity=chunk_steps_max + 1, controller=controller,
+                              external_motors=external_motors)
         self.chunk_steps_max = chunk_steps_max
         self.sim.armed = False
         self._snap_values = np.zeros(SNAPSHOT_SIZE)
@@ -255,8 +258,8 @@ class LiveRig:
         return self.sim.fault_status()
 
     def fault_signature(self) -> tuple:
-        """Changes whenever :meth:`fault_status` may have changed (cheap: for pollers)."""
-        return len(self.sim.faults.events), self.sim.us.flags.tobytes()
+        """Changes whenever :meth:`fault_status` or :attr:`plugin_failure` may have changed (cheap: for pollers)."""
+        return len(self.sim.faults.events), self.sim.us.flags.tobytes(), id(self.sim.plugin_failure)
 
     def fault_events(self, since: int = 0) -> list[FaultEvent]:
         """Every fault injection (config or command) from number ``since`` on, oldest first."""
@@ -272,9 +275,28 @@ class LiveRig:
         return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0,
                              index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
 
+    @property
+    def controller(self):
+        """The controller plug-in flying (a :class:`rig_emulator.controllers.Controller`), or None."""
+        return self.sim.plugin.controller
+
+    @property
+    def plugin_failure(self):
+        """Why the plug-in stopped (a :class:`~rig_emulator.controllers.PluginError` naming it, the
+        time and the problem; the rig then disarmed), None while it flies. Arming clears it."""
+        return self.sim.plugin_failure
+
     # --- commanding ------------------------------------------------------------------------
     def arm(self, armed: bool = True) -> None:
         self.sim.armed = bool(armed)
+
+    def set_motor_voltages(self, volts) -> None:
+        """Motor voltages 1-4 (V) from the next step on; a rig built with ``external_motors=True``."""
+        self.sim.set_motor_voltages(volts)
+
+    def set_motor_thrusts(self, thrusts) -> None:
+        """Motor thrusts 1-4 (N, through Eq. 40) from the next step on; ``external_motors=True``."""
+        self.sim.set_motor_thrusts(thrusts)
 
     def set_param(self, key: str, value) -> RigConfig:
         """Change one parameter of the running rig (validated; rejected changes change nothing)."""
@@ -292,8 +314,18 @@ class LiveRig:
         gp = self._guidance_from(new_cfg, self.sim.gp)
         dist_keys = [k for k in changes if k.startswith("disturbance.")]
         dist = disturbances(new_cfg) if dist_keys else self.sim.dist
+        plugin = self.sim.plugin
+        if plugin.controller is not None and "controller.params" in changes:
+            from rig_emulator.controllers import ControllerParams
+
+            check = ControllerParams(type(plugin.controller).params, new_cfg["controller.params"], owner=plugin.name)
+        else:
+            check = None  # (a PluginError above changed nothing)
         self.sim.cfg, self.sim.pp, self.sim.cp, self.sim.gp, self.sim.dist = new_cfg, pp, cp, gp, dist
         self.sim.up = up
+        plugin.refresh_rig(cp)
+        if check is not None:
+            plugin.controller.params.array[:] = check.array
         return new_cfg
 
     def _guidance_from(self, cfg: RigConfig, current):

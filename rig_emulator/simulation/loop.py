@@ -11,6 +11,10 @@ arrays: a headless run calls it once, the MAVLink rig calls it in chunks. After 
 health and loss of control; when its failsafe disarms, the rest of the call runs disarmed
 (the caller reads the latch and keeps the rig disarmed).
 
+A controller plug-in (``pl``, ``pfn``; :mod:`rig_emulator.control.plugin_step`) replaces the
+built-in control update when ``pl.mode`` is not ``P_NONE``; with ``P_EXTERNAL`` no
+controller runs and the motor voltages ``v_cmd`` are whatever the caller set (lockstep).
+
 Reading: the accelerometers' lever-arm term uses the angular acceleration of the
 previous step's first RK4 stage.
 """
@@ -30,6 +34,8 @@ from rig_emulator.control.controller import (
     REF_VEL,
     control_update,
 )
+from rig_emulator.control.plugin_layout import P_EXTERNAL, P_NONE
+from rig_emulator.control.plugin_step import plugin_control
 from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
 from rig_emulator.estimation.load_cell_filter import load_cell_filter_step
 from rig_emulator.estimation.onboard_position import onboard_translation_step
@@ -67,7 +73,7 @@ def run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng, up, us,
+    sp, ss, rng, up, us, pl, pfn,
 ):
     """Advance the rig; returns the next free log row.
 
@@ -82,7 +88,7 @@ def run_steps(
         k_start, n_steps, dt, ctrl_div, log_div,
         x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
         cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-        sp, ss, rng, up, us,
+        sp, ss, rng, up, us, pl, pfn,
     )
 
 
@@ -91,7 +97,7 @@ def _run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng, up, us,
+    sp, ss, rng, up, us, pl, pfn,
 ):
     """The step loop of :func:`run_steps` (no reference counting: no allocation here)."""
     ctrl_dt = dt * ctrl_div
@@ -133,10 +139,15 @@ def _run_steps(
                 wz = x[12]
             if armed:
                 guidance_update(t, pos, gp, gstate, reached_t, ref)
-                control_update(
-                    ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
-                    ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
-                )
+                if pl.mode == P_NONE:  # the built-in strategy
+                    control_update(
+                        ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
+                        ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
+                    )
+                elif pl.mode != P_EXTERNAL:  # a controller plug-in (issue 16); P_EXTERNAL: v_cmd set from outside
+                    if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
+                                          ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
+                        armed = False  # the plug-in failed: motors off from the next step (pl.status says why)
             if k % up.div == 0 and supervise(t, armed, sp.simulate, sp.estimated, phi, theta, wx, wy, wz, cout,
                                              ss.awork.ensemble.rejected, ss.awork.combined, ss.health[1], up, us):
                 armed = False  # the failsafe cuts the motors from the next step on
