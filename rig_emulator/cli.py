@@ -103,7 +103,7 @@ def cmd_simulate(args) -> int:
     errors = result.mean_errors()
     label = f"{_controller_label(cfg, args.strategy)} ({args.airframe})"
     rows = {label: errors}
-    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" and not cfg["controller.plugin"] else None
+    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" else None
     if paper is not None:
         rows[f"paper {args.strategy}"] = paper
     if args.json:
