@@ -15,6 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import shutil
+import signal
 import sys
 from pathlib import Path
 
@@ -22,6 +24,7 @@ import numpy as np
 
 from protocol.mean_error import PAPER_TABLE_6, format_table
 from rig_emulator.config.loader import ConfigError, available, load_config, parse_override
+from rig_emulator.compile_notice import compile_notice
 from rig_emulator.config.schema import SCHEMA, STRATEGIES
 from rig_emulator.link.serve_args import add_serve_args
 
@@ -83,9 +86,27 @@ def _failsafe_summary(result) -> dict | None:
             "action": result.config["failsafe.action"]}
 
 
-def cmd_simulate(args) -> int:
-    from rig_emulator.simulation.run import Simulation
+def _series_writer(path: Path, n_rows: int):
+    """The writer for ``--out`` (None for a .tlog, written from the whole result), after checking
+    that the file's directory exists and has room for the run (refused before anything runs)."""
+    from rig_emulator.headless.series_files import WRITERS, bytes_per_row
 
+    if path.suffix == ".tlog":
+        return None
+    if path.suffix not in WRITERS:
+        raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz, .csv or .tlog")
+    if not path.parent.is_dir():
+        raise ConfigError(f"--out {path}: directory {str(path.parent)!r} does not exist")
+    need = n_rows * bytes_per_row(path.suffix)
+    free = shutil.disk_usage(path.parent).free
+    if need > free:
+        raise ConfigError(f"--out {path}: the run records {n_rows} rows, about {need / 2**30:.1f} GiB while it is "
+                          f"written, and {str(path.parent)!r} has {free / 2**30:.1f} GiB free; shorten --duration or "
+                          "lower sim.log_rate_hz (e.g. --set sim.log_rate_hz=10)")
+    return WRITERS[path.suffix](path)
+
+
+def cmd_simulate(args) -> int:
     overrides = _overrides(args)
     overrides["control.strategy"] = args.strategy
     overrides["sim.seed"] = args.seed
@@ -94,35 +115,83 @@ def cmd_simulate(args) -> int:
     if args.omega is not None:
         overrides["guidance.omega"] = args.omega
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
-    sim = Simulation(cfg)
+    out = Path(args.out) if args.out else None
+    if out is not None and out.suffix == ".tlog":
+        return _simulate_to_tlog(args, cfg, out)
+    return _simulate_streamed(args, cfg, out)
+
+
+def _simulate_to_tlog(args, cfg, out: Path) -> int:
+    """A .tlog is exported from the whole run, held in memory."""
+    from rig_emulator.simulation.run import Simulation
+
+    with compile_notice():
+        sim = Simulation(cfg)
+        sim.warm_up()
     result = sim.run()
-    errors = result.mean_errors()
+    fs = _failsafe_summary(result)
+    _print_summary(args, cfg, result, result.mean_errors(), result.reached_t,
+                   None if fs is None else (fs["t_s"], fs["cause"]))
+    _write_series(result, out)
+    return 0
+
+
+def _simulate_streamed(args, cfg, out: Path | None) -> int:
+    """Run in chunks (memory bounded whatever the duration), the series streamed to ``--out``;
+    Ctrl-C ends the run after the current chunk, keeps what was simulated and exits 130."""
+    from rig_emulator.simulation.faults import failsafe_cause_text
+    from rig_emulator.headless.streamed import StreamedRun
+
+    with compile_notice():
+        run = StreamedRun(cfg)
+        run.warm_up()
+    n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"])) // run.sim.log_div)
+    writer = _series_writer(out, n_rows) if out is not None else None
+    previous = signal.signal(signal.SIGINT, lambda *_: run.request_stop())
+    try:
+        result = run.run([writer] if writer is not None else [])
+    except BaseException:
+        if writer is not None:
+            writer.abort()
+        raise
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if writer is not None:
+        writer.commit()
+    if result.interrupted:
+        kept = f"; {result.rows} rows written to {out}" if writer is not None else ""
+        print(f"rig-emulator: interrupted at t = {result.sim_time_s:.3f} s of {cfg['sim.duration']:g} s{kept}",
+              file=sys.stderr, flush=True)
+        return 130
+    fs = None if result.failsafe is None else (result.failsafe[0], failsafe_cause_text(result.failsafe[1]))
+    _print_summary(args, cfg, result, result.mean_errors, result.reached_t, fs)
+    return 0
+
+
+def _print_summary(args, cfg, result, errors: dict, reached, failsafe) -> None:
+    """The figures of a finished run: mean errors (Eq. 45), failsafe, waypoints (text or --json)."""
     rows = {args.strategy: errors}
     if args.scenario == "helix" and args.strategy in PAPER_TABLE_6:
         rows[f"paper {args.strategy}"] = PAPER_TABLE_6[args.strategy]
+    fs = None if failsafe is None else {"t_s": failsafe[0], "cause": failsafe[1], "action": cfg["failsafe.action"]}
     if args.json:
         print(json.dumps({"scenario": args.scenario, "strategy": args.strategy, "seed": args.seed,
                           "mean_errors": {k: (None if not math.isfinite(v) else v) for k, v in errors.items()},
                           "sim_time_s": result.sim_time_s, "wall_time_s": result.wall_time_s,
-                          "real_time_factor": result.real_time_factor, "failsafe": _failsafe_summary(result)}))
-    else:
-        print(f"scenario {args.scenario}, strategy {args.strategy}, seed {args.seed}: "
-              f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
-        print("mean errors (Eq. 45):")
-        print(format_table(rows))
-        fs = _failsafe_summary(result)
-        if fs is not None:
-            what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
-            print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")
-        if cfg["guidance.type"] == "waypoints":
-            reached = result.reached_t
-            done = int(np.isfinite(reached).sum())
-            times = ", ".join("-" if not np.isfinite(t) else f"{t:.2f}" for t in reached)
-            print(f"waypoints reached: {done}/{reached.size} at t = [{times}] s "
-                  f"(switching radius {cfg['guidance.switching_radius']:g} m)")
-    if args.out:
-        _write_series(result, Path(args.out))
-    return 0
+                          "real_time_factor": result.real_time_factor, "failsafe": fs}))
+        return
+    print(f"scenario {args.scenario}, strategy {args.strategy}, seed {args.seed}: "
+          f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
+    print("mean errors (Eq. 45):")
+    print(format_table(rows))
+    if fs is not None:
+        what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
+        print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")
+    if cfg["guidance.type"] == "waypoints":
+        done = int(np.isfinite(reached).sum())
+        times = ", ".join("-" if not np.isfinite(t) else f"{t:.2f}" for t in reached)
+        print(f"waypoints reached: {done}/{reached.size} at t = [{times}] s "
+              f"(switching radius {cfg['guidance.switching_radius']:g} m)")
 
 
 def cmd_serve(args) -> int:
@@ -224,6 +293,9 @@ def main(argv=None) -> int:
     except ConfigError as exc:
         print(f"rig-emulator: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C before a command installed its own handling (e.g. while compiling)
+        print("rig-emulator: interrupted", file=sys.stderr, flush=True)
+        return 130
 
 
 if __name__ == "__main__":
