@@ -7,10 +7,10 @@ temporary ``HILMS_NUMBA_CACHE``, removed afterwards) and records numba's own com
 compiler pass). It prints:
 
 * the wall and CPU time of the whole cold call (what a user waits for on a first run);
-* per compiled function (dispatcher and signature): the time spent in its own compilation,
-  callees' compilations excluded ("self"), and with them ("total"); how many signatures each
-  dispatcher was compiled for (a function compiled for several argument types pays several
-  times);
+* per compiled function (dispatcher): the time of its own compiler passes, callees'
+  compilations excluded ("self"), and with them ("total"); how many signatures each
+  dispatcher was compiled for (a function compiled for several argument types, e.g. a
+  literal constant argument, pays several times);
 * per compiler pass, its self time summed over all functions (type inference, inlining,
   lowering to LLVM IR and LLVM's optimisation and code generation show up here);
 * the time outside any compile event (imports, cache writes, the run itself).
@@ -63,6 +63,7 @@ def _profile(scenario: str, duration: float) -> dict:
             return f"{disp.py_func.__module__}.{disp.py_func.__qualname__}"
         return d["name"].split(" [")[0]
 
+    fn_own = defaultdict(float)  # compiler-pass time of the function itself (callees' compiles excluded)
     fn_self = defaultdict(float)
     fn_total = defaultdict(float)
     fn_sigs = defaultdict(set)
@@ -85,7 +86,7 @@ def _profile(scenario: str, duration: float) -> dict:
             fn_sigs[name].add(str(e0.data.get("args")))
         else:
             pass_self[name] += total - child
-            # a pass's self time is also its function's self time; attribute it to the function
+            fn_own[f"{e0.data['module']}.{e0.data['qualname']}"] += total - child
     return {
         "scenario": scenario,
         "wall_s": wall,
@@ -93,7 +94,8 @@ def _profile(scenario: str, duration: float) -> dict:
         "import_s": t_import,
         "in_compile_events_s": in_compile,
         "functions": sorted(
-            ({"name": n, "self_s": fn_self[n], "total_s": fn_total[n], "signatures": len(fn_sigs[n])} for n in fn_self),
+            ({"name": n, "self_s": fn_own.get(n, 0.0) + fn_self[n], "total_s": fn_total[n],
+              "signatures": len(fn_sigs[n])} for n in fn_self),
             key=lambda r: -r["self_s"],
         ),
         "passes": sorted(({"name": n, "self_s": s} for n, s in pass_self.items()), key=lambda r: -r["self_s"]),
@@ -106,15 +108,20 @@ def main(argv=None) -> int:
     p.add_argument("--duration", type=float, default=0.1)
     p.add_argument("--top", type=int, default=25)
     p.add_argument("--json", help="also write the figures to this JSON file")
+    p.add_argument("--cache", help="numba cache directory to compile into and keep (must be empty; default: a "
+                                   "temporary one, removed)")
     args = p.parse_args(argv)
     if "rig_emulator._jit" in sys.modules:
         raise SystemExit("run in a fresh process: the numba cache directory is chosen at import")
-    cache = tempfile.mkdtemp(prefix="hilms-compile-profile-")
+    cache = args.cache or tempfile.mkdtemp(prefix="hilms-compile-profile-")
+    if args.cache and os.path.isdir(cache) and os.listdir(cache):
+        raise SystemExit(f"--cache {cache}: not empty (the profile needs a cold cache)")
     os.environ["HILMS_NUMBA_CACHE"] = cache
     try:
         out = _profile(args.scenario, args.duration)
     finally:
-        shutil.rmtree(cache, ignore_errors=True)
+        if not args.cache:
+            shutil.rmtree(cache, ignore_errors=True)
     print(f"cold {args.scenario} {args.duration:g} s: wall {out['wall_s']:.1f} s, CPU {out['cpu_s']:.1f} s "
           f"(imports {out['import_s']:.1f} s wall; inside numba compile events {out['in_compile_events_s']:.1f} s)")
     print(f"\nfunctions by self compile time (top {args.top} of {len(out['functions'])}):")
