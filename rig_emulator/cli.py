@@ -13,11 +13,13 @@ Exit codes: 0 success, 2 bad arguments or configuration.
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import math
 import shutil
 import signal
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -47,62 +49,44 @@ def _overrides(args) -> dict:
     return out
 
 
-def _write_series(result, path: Path) -> None:
-    """Write the run's time series as .npz, .csv or a MAVLink .tlog (the messages the live rig streams)."""
-    series = result.series
-    if path.suffix == ".tlog":
-        from rig_emulator.link.tlog_export import export_tlog
-
-        export_tlog(result, path)
-        return
-    if path.suffix == ".npz":
-        np.savez_compressed(path, **series)
-        return
-    if path.suffix == ".csv":
-        cols, names = [], []
-        for name, arr in series.items():
-            arr = np.asarray(arr)
-            if arr.ndim == 1:
-                cols.append(arr)
-                names.append(name)
-            else:
-                for i in range(arr.shape[1]):
-                    cols.append(arr[:, i])
-                    names.append(f"{name}_{i}")
-        np.savetxt(path, np.column_stack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.9g")
-        return
-    raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz, .csv or .tlog")
+TLOG_BYTES_PER_ROW = 700  # about eleven messages a log row
 
 
-def _failsafe_summary(result) -> dict | None:
-    """When and why the loss-of-control failsafe tripped in a headless run (None: it did not)."""
-    from rig_emulator.simulation.faults import failsafe_cause_text
-
-    fs = result.series["failsafe"]
-    if not np.any(fs > 0):
+def _parse_start_time(text: str | None) -> float | None:
+    """``--start-time``: Unix seconds, or an ISO 8601 date and time (UTC unless it names its offset)."""
+    if text is None:
         return None
-    i = int(np.argmax(fs > 0))
-    return {"t_s": float(result.series["t"][i]), "cause": failsafe_cause_text(int(fs[i])),
-            "action": result.config["failsafe.action"]}
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    try:
+        when = datetime.datetime.fromisoformat(text.strip())
+    except ValueError:
+        raise ConfigError(f"--start-time {text!r}: expected Unix seconds or an ISO 8601 time such as "
+                          "2026-11-23T09:00:00Z") from None
+    if when.tzinfo is None:
+        when = when.replace(tzinfo=datetime.timezone.utc)
+    return when.timestamp()
 
 
-def _series_writer(path: Path, n_rows: int):
-    """The writer for ``--out`` (None for a .tlog, written from the whole result), after checking
-    that the file's directory exists and has room for the run (refused before anything runs)."""
+def _series_writer(path: Path, n_rows: int, cfg, start_unix_s: float | None):
+    """The writer for ``--out``, after checking that the file's directory exists and has room for
+    the run (refused before anything runs)."""
     from rig_emulator.headless.series_files import WRITERS, bytes_per_row
 
-    if path.suffix == ".tlog":
-        return None
-    if path.suffix not in WRITERS:
+    if path.suffix not in (*WRITERS, ".tlog"):
         raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz, .csv or .tlog")
     if not path.parent.is_dir():
         raise ConfigError(f"--out {path}: directory {str(path.parent)!r} does not exist")
-    need = n_rows * bytes_per_row(path.suffix)
+    need = n_rows * (TLOG_BYTES_PER_ROW if path.suffix == ".tlog" else bytes_per_row(path.suffix))
     free = shutil.disk_usage(path.parent).free
     if need > free:
         raise ConfigError(f"--out {path}: the run records {n_rows} rows, about {need / 2**30:.1f} GiB while it is "
                           f"written, and {str(path.parent)!r} has {free / 2**30:.1f} GiB free; shorten --duration or "
                           "lower sim.log_rate_hz (e.g. --set sim.log_rate_hz=10)")
+    if path.suffix == ".tlog":
+        return None  # exported from the whole run (_simulate_to_tlog)
     return WRITERS[path.suffix](path)
 
 
@@ -116,27 +100,37 @@ def cmd_simulate(args) -> int:
         overrides["guidance.omega"] = args.omega
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
     out = Path(args.out) if args.out else None
+    start = _parse_start_time(args.start_time)
     if out is not None and out.suffix == ".tlog":
-        return _simulate_to_tlog(args, cfg, out)
-    return _simulate_streamed(args, cfg, out)
+        return _simulate_to_tlog(args, cfg, out, start)
+    return _simulate_streamed(args, cfg, out, start)
 
 
-def _simulate_to_tlog(args, cfg, out: Path) -> int:
-    """A .tlog is exported from the whole run, held in memory."""
+def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
+    """A .tlog is still exported from the whole run held in memory (not streamed yet); its
+    records are stamped from ``start_unix_s`` (default: now, whole seconds)."""
+    from rig_emulator.link.tlog_export import export_tlog
+    from rig_emulator.simulation.faults import failsafe_cause_text
     from rig_emulator.simulation.run import Simulation
 
+    n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"]))
+               // int(round(cfg["sim.physics_rate_hz"] / cfg["sim.log_rate_hz"])))
+    _series_writer(out, n_rows, cfg, start_unix_s)  # the checks: directory, free space
     with compile_notice():
         sim = Simulation(cfg)
         sim.warm_up()
     result = sim.run()
-    fs = _failsafe_summary(result)
-    _print_summary(args, cfg, result, result.mean_errors(), result.reached_t,
-                   None if fs is None else (fs["t_s"], fs["cause"]))
-    _write_series(result, out)
+    fs = result.series["failsafe"]
+    failsafe = None
+    if np.any(fs > 0):
+        i = int(np.argmax(fs > 0))
+        failsafe = (float(result.series["t"][i]), failsafe_cause_text(int(fs[i])))
+    _print_summary(args, cfg, result, result.mean_errors(), result.reached_t, failsafe)
+    export_tlog(result, out, epoch_s=float(int(time.time())) if start_unix_s is None else start_unix_s)
     return 0
 
 
-def _simulate_streamed(args, cfg, out: Path | None) -> int:
+def _simulate_streamed(args, cfg, out: Path | None, start_unix_s: float | None) -> int:
     """Run in chunks (memory bounded whatever the duration), the series streamed to ``--out``;
     Ctrl-C ends the run after the current chunk, keeps what was simulated and exits 130."""
     from rig_emulator.simulation.faults import failsafe_cause_text
@@ -146,7 +140,7 @@ def _simulate_streamed(args, cfg, out: Path | None) -> int:
         run = StreamedRun(cfg)
         run.warm_up()
     n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"])) // run.sim.log_div)
-    writer = _series_writer(out, n_rows) if out is not None else None
+    writer = _series_writer(out, n_rows, cfg, start_unix_s) if out is not None else None
     previous = signal.signal(signal.SIGINT, lambda *_: run.request_stop())
     try:
         result = run.run([writer] if writer is not None else [])
@@ -260,7 +254,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--omega", type=float, help="harmonic frequency in rad/s (Eq. 44)")
-    p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams)")
+    p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams); "
+                                 ".npz and .csv are streamed as the run goes (memory does not grow with --duration)")
+    p.add_argument("--start-time", metavar="WHEN",
+                   help="a .tlog's start (its record time stamps): Unix seconds or ISO 8601 (default: now, whole "
+                        "seconds). Message time stamps count simulated time from 0 whatever it is; the same "
+                        "arguments with the same --start-time give the same bytes")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     _add_config_args(p)
     p.set_defaults(func=cmd_simulate)
