@@ -12,6 +12,8 @@ Layouts:
 * ``cout`` (what the controller decided, for logs and telemetry): OUT_* indices.
 """
 
+import numpy as np
+
 from rig_emulator._jit import jit
 from rig_emulator.control.allocation import allocate, euler_torque_to_body
 from rig_emulator.control.fuzzy import flc_axis
@@ -103,9 +105,9 @@ def position_stage(dt, pos, vel, phi, theta, ref, cp, cstate, cout):
                 az = ref[REF_ACC + 2] + cp.smcp_lam[2] * dez + cp.smcp_k[2] * switch(dez + cp.smcp_lam[2] * ez, True, cp.smcp_phi)
             else:
                 integ = cstate[CS_POS_INT : CS_POS_INT + 3]
-                ax = pid_axis(ex, dex, ref[REF_ACC], cp.pidp_kp[0], cp.pidp_ki[0], cp.pidp_kd[0], integ, 0, dt, cp.pid_limit)
-                ay = pid_axis(ey, dey, ref[REF_ACC + 1], cp.pidp_kp[1], cp.pidp_ki[1], cp.pidp_kd[1], integ, 1, dt, cp.pid_limit)
-                az = pid_axis(ez, dez, ref[REF_ACC + 2], cp.pidp_kp[2], cp.pidp_ki[2], cp.pidp_kd[2], integ, 2, dt, cp.pid_limit)
+                ax = pid_axis(ex, dex, ref[REF_ACC], cp.pidp_kp[0], cp.pidp_ki[0], cp.pidp_kd[0], integ, np.int64(0), dt, cp.pid_limit)
+                ay = pid_axis(ey, dey, ref[REF_ACC + 1], cp.pidp_kp[1], cp.pidp_ki[1], cp.pidp_kd[1], integ, np.int64(1), dt, cp.pid_limit)
+                az = pid_axis(ez, dez, ref[REF_ACC + 2], cp.pidp_kp[2], cp.pidp_ki[2], cp.pidp_kd[2], integ, np.int64(2), dt, cp.pid_limit)
             u1 = collective_thrust(cp.mass * (cp.g + az), phi, theta, cp.max_tilt)
             if u1 > 1e-6:
                 ux = cp.mass * ax / u1
@@ -144,9 +146,10 @@ def shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate):
         cstate[CS_FILTER + 0] = phi_d
         cstate[CS_FILTER + 2] = theta_d
         cstate[CS_FILTER + 4] = psi_d
-    r0, dr0, a0 = reference_step(phi_d, cstate, 0, cp.ref_omega, dt, False)
-    r1, dr1, a1 = reference_step(theta_d, cstate, 1, cp.ref_omega, dt, False)
-    r2, dr2, a2 = reference_step(psi_d, cstate, 2, cp.ref_omega, dt, True)
+    # np.int64() / np.bool_(): literal constant arguments would compile one specialisation per value (issue 14)
+    r0, dr0, a0 = reference_step(phi_d, cstate, np.int64(0), cp.ref_omega, dt, np.bool_(False))
+    r1, dr1, a1 = reference_step(theta_d, cstate, np.int64(1), cp.ref_omega, dt, np.bool_(False))
+    r2, dr2, a2 = reference_step(psi_d, cstate, np.int64(2), cp.ref_omega, dt, np.bool_(True))
     return r0, dr0, a0, r1, dr1, a1, r2, dr2, a2
 
 
@@ -179,9 +182,9 @@ def attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0,
             tau3[2] = flc_axis(e3[2], de3[2], cp.flc_psi, cp.rule_table)
         else:
             integ = cstate[CS_ATT_INT : CS_ATT_INT + 3]
-            tau3[0] = cp.ixx * pid_axis(e3[0], de3[0], a0, cp.pida_kp[0], cp.pida_ki[0], cp.pida_kd[0], integ, 0, dt, cp.pid_limit)
-            tau3[1] = cp.iyy * pid_axis(e3[1], de3[1], a1, cp.pida_kp[1], cp.pida_ki[1], cp.pida_kd[1], integ, 1, dt, cp.pid_limit)
-            tau3[2] = cp.izz * pid_axis(e3[2], de3[2], a2, cp.pida_kp[2], cp.pida_ki[2], cp.pida_kd[2], integ, 2, dt, cp.pid_limit)
+            tau3[0] = cp.ixx * pid_axis(e3[0], de3[0], a0, cp.pida_kp[0], cp.pida_ki[0], cp.pida_kd[0], integ, np.int64(0), dt, cp.pid_limit)
+            tau3[1] = cp.iyy * pid_axis(e3[1], de3[1], a1, cp.pida_kp[1], cp.pida_ki[1], cp.pida_kd[1], integ, np.int64(1), dt, cp.pid_limit)
+            tau3[2] = cp.izz * pid_axis(e3[2], de3[2], a2, cp.pida_kp[2], cp.pida_ki[2], cp.pida_kd[2], integ, np.int64(2), dt, cp.pid_limit)
 
 
 @jit(nrt=False)

@@ -112,6 +112,14 @@ class RigSnapshot:
     true_body_rates: tuple = (math.nan,) * 3
     sensors: "SensorSnapshot | None" = None  # None when the sensor models are off
     faults: "FaultStatus | None" = None  # injected faults, the supervisor's detections and failsafe
+    #: simulated time in whole microseconds from the step counter; message time stamps use it
+    #: (None: derive it from ``time_s``, rounded to the microsecond)
+    time_us: int | None = None
+
+    @property
+    def stamp_us(self) -> int:
+        """Simulated time in whole microseconds for message time stamps."""
+        return self.time_us if self.time_us is not None else int(round(self.time_s * 1e6))
 
     @property
     def rotation(self) -> np.ndarray:
@@ -224,6 +232,7 @@ class LiveRig:
         nan3 = (math.nan,) * 3
         return RigSnapshot(
             time_s=float(sim.time),
+            time_us=sim.time_us,
             armed=sim.armed,
             position=tuple(t[0:3]),
             velocity=tuple(t[3:6]),

@@ -49,7 +49,7 @@ from rig_emulator.sensors.sensor_step import SAMPLED_CELLS, sensors_step
 from rig_emulator.simulation import log_layout as L
 
 
-@jit(inline="always")
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
 def _sense(k, x, pp, sp, ss, rng, omega_dot):
     """Sample the sensors due at step k and run the estimators on them."""
     if k % sp.suite.cells.decim == 0:  # the load cells need the motors' thrusts and speeds

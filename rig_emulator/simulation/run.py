@@ -26,6 +26,14 @@ from rig_emulator.simulation.sensing import build_sensing
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 
 
+def step_time_us(k: int, rate_hz: float) -> int:
+    """Time of physics step ``k`` at ``rate_hz`` in whole microseconds (exact for integer rates)."""
+    rate = float(rate_hz)
+    if rate.is_integer():
+        return (int(k) * 1_000_000) // int(rate)
+    return int(round(int(k) * 1_000_000 / rate))
+
+
 @dataclass
 class SimResult:
     """What a headless run produced: the recorded time series and its figures."""
@@ -114,6 +122,12 @@ class Simulation:
     @property
     def time(self) -> float:
         return self.k * self.dt
+
+    @property
+    def time_us(self) -> int:
+        """Simulated time in whole microseconds, from the integer step counter (what message
+        time stamps are derived from: no float clock, no rounding down of k dt)."""
+        return step_time_us(self.k, self.cfg["sim.physics_rate_hz"])
 
     def supervisor_params(self, cfg: RigConfig):
         """The supervisor's arguments for ``cfg`` (health thresholds, failsafe) on this rig's sensors."""
