@@ -58,6 +58,8 @@ def FS(doc, unit="", lo=-math.inf, hi=math.inf, length=None):
 
 STRATEGIES = ("smc-flc", "flc", "smc", "pid")
 GUIDANCE_TYPES = ("hover", "attitude", "helix", "waypoints")
+FENCE_ACTIONS = ("none", "warning", "hold", "return", "terminate", "land")  # PX4 GF_ACTION order
+OFFBOARD_LOSS_ACTIONS = ("land", "hold", "return", "terminate")  # PX4 COM_OBL_ACT order
 
 SCHEMA: dict[str, Spec] = {
     # --- simulation ----------------------------------------------------------------
@@ -83,6 +85,8 @@ SCHEMA: dict[str, Spec] = {
     "motors.thrust_ceiling_grf": F("thrust ceiling per motor (Sec. 3-2)", "gr.F", 0.0, 1e5, lo_open=True),
     "motors.time_constant": F("first-order lag from voltage command to thrust", "s", 0.0, 10.0),
     "motors.kf": F("rotor thrust coefficient kF, F = kF Omega^2 (Eq. 38)", "N s^2/rad^2", 0.0, 1.0, lo_open=True),
+    "motors.kv_rpm_per_v": F("motor velocity constant KV (Sec. 4: 750 KV); sizes the current the motors draw "
+                             "from the bench supply (physics/electrical.py)", "rpm/V", 1.0, 1e5),
     # --- control ---------------------------------------------------------------------------
     "control.strategy": S("controller strategy", STRATEGIES),
     "control.max_tilt_deg": F("tilt limit of the Eq. 35 singularity guard", "deg", 1.0, 80.0),
@@ -136,6 +140,23 @@ SCHEMA: dict[str, Spec] = {
     # --- MAVLink missions ------------------------------------------------------------------------
     "mission.item0_home": Spec("bool", "treat mission item 0 as home, stored but not flown (ArduPilot's "
                                "convention, for MAVProxy's wp load); false: every item is flown (PX4's)"),
+    "mission.max_leg_m": F("longest leg an uploaded mission may have, the first leg measured from home (PX4's "
+                           "MIS_DIST_WPS / MIS_DIST_1WP); a longer one is refused at upload", "m", 1.0, 1e7),
+    # --- geofence (protocol/mission_checks.py, link fence monitor) ------------------------------------
+    "fence.enabled": Spec("bool", "geofence on: missions reaching outside are refused at upload, a breach in flight "
+                          "triggers fence.action"),
+    "fence.action": S("on a breach, PX4's GF_ACTION codes: 'none', 'warning' (STATUSTEXT only), 'hold' (hold "
+                      "position), 'return' (return to launch), 'terminate' (motors off, disarm), 'land'",
+                      FENCE_ACTIONS),
+    "fence.radius": F("largest horizontal distance from home (ArduPilot FENCE_RADIUS)", "m", 1.0, 1e6),
+    "fence.alt_max": F("highest altitude above home (ArduPilot FENCE_ALT_MAX)", "m", -1e4, 1e5),
+    "fence.alt_min": F("lowest altitude above home (ArduPilot FENCE_ALT_MIN)", "m", -1e4, 1e5),
+    # --- offboard set-points (link offboard monitor) -------------------------------------------------
+    "offboard.loss_timeout": F("offboard set-point timeout: no set-point for this long (simulated time) in "
+                               "OFFBOARD triggers offboard.loss_action (PX4 COM_OF_LOSS_T)", "s", 0.0, 60.0,
+                               lo_open=True),
+    "offboard.loss_action": S("on an offboard set-point timeout, PX4's COM_OBL_ACT codes: 'land', 'hold', "
+                              "'return', 'terminate' (motors off, disarm)", OFFBOARD_LOSS_ACTIONS),
     # --- initial state -------------------------------------------------------------------------
     "initial.position": V3("initial virtual position (world ENU)", "m"),
     "initial.euler_deg": V3("initial phi, theta, psi", "deg", -180.0, 180.0),
