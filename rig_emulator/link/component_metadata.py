@@ -54,7 +54,7 @@ def _number(v: float):
 
 def _entry(p, defaults) -> dict:
     spec = p.spec
-    short = spec.doc.split(";")[0].split(" (")[0].strip()
+    short = spec.doc.split(";")[0].split(":")[0].strip()
     suffix = p.name[len(p.name.rstrip("0123456789")):] if p.element is not None and p.name[-1].isdigit() else None
     if p.element is not None:
         label = next((v for k, v in _ELEMENT_NAMES.items() if p.name.endswith(k)), f"element {suffix or p.element + 1}")
