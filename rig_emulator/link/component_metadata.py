@@ -24,6 +24,7 @@ import json
 import math
 import zlib
 
+from protocol.dialect import mavlink as M
 from rig_emulator.config.loader import load_config
 from rig_emulator.link.params import ParamTable
 
@@ -114,3 +115,19 @@ def general_metadata() -> bytes:
 def metadata_files() -> dict[str, bytes]:
     """Every file the rig serves over MAVFTP, by path."""
     return {GENERAL_PATH: general_metadata(), PARAMETERS_PATH: parameter_metadata()}
+
+
+# --- the messages that say where the files are (MAV_CMD_REQUEST_MESSAGE) ---------------------------------
+def component_metadata_message(snap, ctx):
+    """COMPONENT_METADATA: URI and CRC32 of the general metadata file."""
+    return M.MAVLink_component_metadata_message(time_boot_ms=int(snap.time_s * 1000.0) % 2**32,
+                                                file_crc=crc32(general_metadata()),
+                                                uri=mftp_uri(GENERAL_PATH).encode("ascii"))
+
+
+def component_information_message(snap, ctx):
+    """COMPONENT_INFORMATION (deprecated form, for older ground stations): the same file, no peripherals."""
+    return M.MAVLink_component_information_message(
+        time_boot_ms=int(snap.time_s * 1000.0) % 2**32, general_metadata_file_crc=crc32(general_metadata()),
+        general_metadata_uri=mftp_uri(GENERAL_PATH).encode("ascii"), peripherals_metadata_file_crc=0,
+        peripherals_metadata_uri=b"")

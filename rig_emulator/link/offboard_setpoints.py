@@ -68,7 +68,7 @@ class OffboardSetpoints:
         self.last_setpoint_s = self.srv.rig.time_s
         if self.srv.modes.main != OFFBOARD:
             self.srv.modes.note(OFFBOARD, 0)
-            self.srv.heartbeat_pending = True
+            self.srv.broadcast_heartbeat()
 
     def _run(self, msg, channel, apply) -> None:
         try:
