@@ -5,7 +5,8 @@ read-only file system:
 
 * ListDirectory (offset = index of the first entry; entries ``F<name>\\t<size>`` and
   ``D<name>``, NUL-separated, as many as fit in 239 bytes; NAK EOF past the last),
-* OpenFileRO (ACK with the file size, a new session), ReadFile (at ``offset``, up to ``size``
+* OpenFileRO (ACK with the file size and the session to use: the one the request named when
+  it is free, as ArduPilot does and MAVProxy expects, else a free one), ReadFile (at ``offset``, up to ``size``
   bytes; NAK EOF at or past the end), BurstReadFile (the rest of the file from ``offset`` in
   consecutive ACKs, the last flagged ``burst_complete``; the client asks again for gaps),
 * TerminateSession, ResetSessions.
@@ -16,7 +17,7 @@ FileProtected, other opcodes UnknownCommand; a path that is not served FileNotFo
 MAVProxy's ``@PARAM/param.pck`` request fails at once and it falls back to the parameter
 protocol), a read on a session not open InvalidSession, an opcode 0 or a size beyond the
 payload InvalidDataSize, a fifth open session NoSessionsAvailable. The reply's ``seq`` is the
-request's + 1; a repeated request (same seq as the last one answered on this channel) gets
+request's + 1; a repeated request (byte for byte the last one answered on this channel) gets
 the same reply again without acting twice, so a lost reply costs nothing.
 
 Paths: ``/`` and ``""`` are the root; leading slashes are ignored; directories are
@@ -145,7 +146,10 @@ class FtpServer:
             return self._nak(req, ERR_FILE_NOT_FOUND)
         if len(self.sessions) >= MAX_SESSIONS:
             return self._nak(req, ERR_NO_SESSIONS_AVAILABLE)
-        session = next(s for s in range(256) if s not in self.sessions)
+        # the session the client named when it is free (ArduPilot's reading, which MAVProxy relies on),
+        # else the lowest free one (the spec: the ACK's session is the one to use)
+        session = req.session if req.session not in self.sessions else next(
+            s for s in range(256) if s not in self.sessions)
         self.sessions[session] = data
         return [self._pack(req, OP_ACK, struct.pack("<I", len(data)), offset=0, session=session)]
 
@@ -202,16 +206,17 @@ class FtpServer:
     def handle(self, payload: bytes, channel_key=None) -> list[bytes] | None:
         """Reply payloads (unpadded) for one request payload; None when it cannot be parsed.
 
-        A request with the seq of the last one answered for ``channel_key`` is a retry: the
-        same replies are sent again and nothing is done twice (a second open would leak a session)."""
+        A request identical to the last one answered for ``channel_key`` is a retry: the same
+        replies are sent again and nothing is done twice (a second open would leak a session)."""
         req = Request.parse(payload)
         if req is None:
             return None
+        wire = bytes(payload[:HEADER.size + min(req.size, MAX_DATA)])
         last = self._last.get(channel_key)
-        if last is not None and last[0] == req.seq and last[1] == req.opcode:
-            return last[2]
+        if last is not None and last[0] == wire:
+            return last[1]
         replies = self._dispatch(req)
-        self._last[channel_key] = (req.seq, req.opcode, replies)
+        self._last[channel_key] = (wire, replies)
         return replies
 
     def forget(self, channel_key) -> None:

@@ -90,3 +90,11 @@ def test_garbage_never_raises(payload):
     srv = F.FtpServer(F.FileStore({"a": b"x"}))
     out = srv.handle(payload)
     assert out is None or all(len(p) <= F.PAYLOAD_LEN for p in out)
+
+
+def test_a_new_request_with_an_old_seq_is_not_taken_for_a_retry(srv):
+    # MAVProxy starts every operation at seq 0: its open of param.pck, then of a metadata file
+    (r,) = srv.handle(req(F.OP_OPEN_FILE_RO, seq=0, data=b"@PARAM/param.pck"), "peer")
+    assert parse(r)["opcode"] == F.OP_NAK
+    (r,) = srv.handle(req(F.OP_OPEN_FILE_RO, seq=0, data=b"/metadata/general.json"), "peer")
+    assert parse(r)["opcode"] == F.OP_ACK
