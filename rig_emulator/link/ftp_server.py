@@ -8,7 +8,8 @@ read-only file system:
 * OpenFileRO (ACK with the file size and the session to use: the one the request named when
   it is free, as ArduPilot does and MAVProxy expects, else a free one), ReadFile (at ``offset``, up to ``size``
   bytes; NAK EOF at or past the end), BurstReadFile (the rest of the file from ``offset`` in
-  consecutive ACKs, the last flagged ``burst_complete``; the client asks again for gaps),
+  consecutive ACKs with consecutive seq numbers, the last flagged ``burst_complete``; the
+  client asks again for gaps),
 * TerminateSession, ResetSessions.
 
 Everything else is NAK'd with the error the spec gives: the write operations (CreateFile,
@@ -118,9 +119,10 @@ class FtpServer:
     # --- replies -------------------------------------------------------------------------------
     @staticmethod
     def _pack(req: Request, opcode: int, data: bytes = b"", offset: int | None = None, burst_complete: int = 0,
-              session: int | None = None) -> bytes:
-        return HEADER.pack((req.seq + 1) % 65536, req.session if session is None else session, opcode, len(data),
-                           req.opcode, burst_complete, 0, req.offset if offset is None else offset) + data
+              session: int | None = None, index: int = 0) -> bytes:
+        """A reply: seq is the request's + 1 (+ ``index`` for the index-th packet of a burst)."""
+        return HEADER.pack((req.seq + 1 + index) % 65536, req.session if session is None else session, opcode,
+                           len(data), req.opcode, burst_complete, 0, req.offset if offset is None else offset) + data
 
     def _nak(self, req: Request, error: int) -> list[bytes]:
         return [self._pack(req, OP_NAK, bytes([error]))]
@@ -174,7 +176,7 @@ class FtpServer:
         while offset < len(data) and len(out) < BURST_PACKETS_PER_CALL:
             chunk = data[offset:offset + n]
             last = offset + len(chunk) >= len(data) or len(out) == BURST_PACKETS_PER_CALL - 1
-            out.append(self._pack(req, OP_ACK, chunk, offset=offset, burst_complete=1 if last else 0))
+            out.append(self._pack(req, OP_ACK, chunk, offset=offset, burst_complete=1 if last else 0, index=len(out)))
             offset += len(chunk)
         return out
 

@@ -52,6 +52,7 @@ def test_open_read_burst_terminate(srv):
     replies = [parse(x) for x in srv.handle(req(F.OP_BURST_READ_FILE, seq=7, session=session, size=239, offset=0))]
     assert b"".join(x["data"] for x in replies) == bytes(range(256)) * 4
     assert [x["burst"] for x in replies] == [0, 0, 0, 0, 1] and replies[-1]["size"] < 239
+    assert [x["seq"] for x in replies] == [8, 9, 10, 11, 12]  # consecutive: MAVSDK drops repeated seqs
     (r,) = srv.handle(req(F.OP_TERMINATE_SESSION, seq=9, session=session))
     assert parse(r)["opcode"] == F.OP_ACK
     (r,) = srv.handle(req(F.OP_READ_FILE, seq=11, session=session, size=10))
