@@ -59,9 +59,12 @@ def test_breach_in_flight_holds_and_reports():
         assert split_custom_mode(hb.custom_mode) == (AUTO, AUTO_LOITER)
         unhealthy = recv(conn, "SYS_STATUS", 5.0, lambda m: not m.onboard_control_sensors_health & M.MAV_SYS_STATUS_GEOFENCE)
         assert unhealthy is not None
-        z0 = rig.server.rig.snapshot().position[2]
+        for _ in range(2):
+            recv(conn, "HEARTBEAT", 5.0)
+        z1 = rig.server.rig.snapshot().position[2]
         recv(conn, "HEARTBEAT", 5.0)
-        assert abs(rig.server.rig.snapshot().position[2] - z0) < 0.3  # held, not climbing on
+        z2 = rig.server.rig.snapshot().position[2]
+        assert z1 < 2.2 and abs(z2 - z1) < 0.05, (z1, z2)  # held just above 1.5 m, not climbing on
         conn.mav.command_long_send(1, 1, M.MAV_CMD_REQUEST_MESSAGE, 0, M.MAVLINK_MSG_ID_FENCE_STATUS, 0, 0, 0, 0, 0, 0)
         assert recv(conn, "FENCE_STATUS", 5.0).breach_count == 1
         conn.close()
