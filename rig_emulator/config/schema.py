@@ -58,6 +58,8 @@ def FS(doc, unit="", lo=-math.inf, hi=math.inf, length=None):
 
 STRATEGIES = ("smc-flc", "flc", "smc", "pid")
 GUIDANCE_TYPES = ("hover", "attitude", "helix", "waypoints")
+FENCE_ACTIONS = ("none", "warning", "hold", "return", "terminate", "land")  # PX4 GF_ACTION order
+OFFBOARD_LOSS_ACTIONS = ("land", "hold", "return", "terminate")  # PX4 COM_OBL_ACT order
 
 SCHEMA: dict[str, Spec] = {
     # --- simulation ----------------------------------------------------------------
@@ -93,6 +95,8 @@ SCHEMA: dict[str, Spec] = {
                                 "gr.F", 0.0, 2000.0),
     "motors.command_steps": I("ESC command resolution: levels over 0..voltage_max (0 = continuous)", 0, 1_000_000),
     "motors.esc_deadband_v": F("ESC dead-band: voltage commands below this give 0 V (0 = none)", "V", 0.0, 10.0),
+    "motors.kv_rpm_per_v": F("motor velocity constant KV (Sec. 4: 750 KV); sizes the current the motors draw "
+                             "from the bench supply (physics/electrical.py)", "rpm/V", 1.0, 1e5),
     # --- control ---------------------------------------------------------------------------
     "control.strategy": S("controller strategy", STRATEGIES),
     "controller.plugin": Spec("str", "controller plug-in 'package.module:Name' flying instead of (part of) the strategy "
@@ -167,6 +171,23 @@ SCHEMA: dict[str, Spec] = {
     # --- MAVLink missions ------------------------------------------------------------------------
     "mission.item0_home": Spec("bool", "treat mission item 0 as home, stored but not flown (ArduPilot's "
                                "convention, for MAVProxy's wp load); false: every item is flown (PX4's)"),
+    "mission.max_leg_m": F("longest leg an uploaded mission may have, the first leg measured from home (PX4's "
+                           "MIS_DIST_WPS / MIS_DIST_1WP); a longer one is refused at upload", "m", 1.0, 1e7),
+    # --- geofence (protocol/mission_checks.py, link fence monitor) ------------------------------------
+    "fence.enabled": Spec("bool", "geofence on: missions reaching outside are refused at upload, a breach in flight "
+                          "triggers fence.action"),
+    "fence.action": S("on a breach, PX4's GF_ACTION codes: 'none', 'warning' (STATUSTEXT only), 'hold' (hold "
+                      "position), 'return' (return to launch), 'terminate' (motors off, disarm), 'land'",
+                      FENCE_ACTIONS),
+    "fence.radius": F("largest horizontal distance from home (ArduPilot FENCE_RADIUS)", "m", 1.0, 1e6),
+    "fence.alt_max": F("highest altitude above home (ArduPilot FENCE_ALT_MAX)", "m", -1e4, 1e5),
+    "fence.alt_min": F("lowest altitude above home (ArduPilot FENCE_ALT_MIN)", "m", -1e4, 1e5),
+    # --- offboard set-points (link offboard monitor) -------------------------------------------------
+    "offboard.loss_timeout": F("offboard set-point timeout: no set-point for this long (simulated time) in "
+                               "OFFBOARD triggers offboard.loss_action (PX4 COM_OF_LOSS_T)", "s", 0.0, 60.0,
+                               lo_open=True),
+    "offboard.loss_action": S("on an offboard set-point timeout, PX4's COM_OBL_ACT codes: 'land', 'hold', "
+                              "'return', 'terminate' (motors off, disarm)", OFFBOARD_LOSS_ACTIONS),
     # --- initial state -------------------------------------------------------------------------
     "initial.position": V3("initial virtual position (world ENU)", "m"),
     "initial.euler_deg": V3("initial phi, theta, psi", "deg", -180.0, 180.0),
