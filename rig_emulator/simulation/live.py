@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rig_emulator.config.loader import ConfigError, RigConfig
-from rig_emulator.control.controller import OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S, OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL
+from rig_emulator.control.controller import CS_TEST_UNTIL, CS_TEST_V, OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S, OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL
 from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, WAYPOINTS,
                                          start_at)
 from rig_emulator._jit import jit
@@ -403,6 +403,20 @@ class LiveRig:
         gs = self.sim.gstate
         if gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0 and gs[GS_DONE] == 0.0 and gs[GS_HOLD_UNTIL] < 0.0:
             start_at(int(gs[GS_INDEX]), self.sim.time, self.position_now(), self.sim.gp, gs)
+
+    def motor_test(self, motor: int, fraction: float, duration: float) -> float:
+        """Bench motor test (DO_MOTOR_TEST): disarmed, command motor 1..4 to ``fraction`` of the
+        full voltage for ``duration`` s from now (the others stay at 0 V); returns the voltage."""
+        if self.sim.armed:
+            raise ValueError("motor test needs the rig disarmed")
+        if motor not in (1, 2, 3, 4) or not 0.0 <= fraction <= 1.0 or not 0.0 < duration <= 60.0:
+            raise ValueError("motor 1..4, throttle in [0, 1], duration in (0, 60] s")
+        volts = fraction * self.sim.pp.v_max
+        cs = self.sim.cstate
+        cs[CS_TEST_V : CS_TEST_V + 4] = 0.0
+        cs[CS_TEST_V + motor - 1] = volts
+        cs[CS_TEST_UNTIL] = self.sim.time + duration
+        return volts
 
     def reboot(self) -> None:
         """Restart the simulation from the configuration's initial state (time 0, disarmed,
