@@ -100,7 +100,7 @@ def _latlon(cmd) -> tuple:
     return x, y
 
 
-def _set_mode(srv, main: int, sub: int):
+def set_mode(srv, main: int, sub: int):
     """Enter (main, sub) as DO_SET_MODE does: (result, follow)."""
     modes = srv.modes
     if not modes.supports(main, sub):
@@ -135,11 +135,11 @@ def takeoff(cmd, srv, channel):
 
 
 def land(cmd, srv, channel):
-    return _set_mode(srv, MD.AUTO, MD.AUTO_LAND)
+    return set_mode(srv, MD.AUTO, MD.AUTO_LAND)
 
 
 def return_to_launch(cmd, srv, channel):
-    return _set_mode(srv, MD.AUTO, MD.AUTO_RTL)
+    return set_mode(srv, MD.AUTO, MD.AUTO_RTL)
 
 
 def reposition(cmd, srv, channel):
@@ -216,7 +216,8 @@ def reboot(cmd, srv, channel):
                       UNSUPPORTED)
     if srv.snapshot().armed:
         return refuse(srv, "reboot refused: disarm first")
-    return ACCEPTED, []  # the server reboots once the ACK is out (RigServer.reboot_pending)
+    srv.reboot_pending = True  # the server reboots once the ACK is out
+    return ACCEPTED, []
 
 
 def motor_test(cmd, srv, channel):

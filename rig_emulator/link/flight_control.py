@@ -109,11 +109,12 @@ class FlightControl:
         self.rig.arm(armed)
         return None
 
-    def poll(self, snap) -> None:
-        """After each physics chunk: flight-task events and the modes they lead to."""
+    def poll(self, snapshot) -> None:
+        """After each physics chunk: flight-task events and the modes they lead to
+        (``snapshot()`` gives the rig's snapshot; called only while a task runs)."""
         if self.tasks.task is None and self.tasks.pending is None and not self.tasks.landing:
             return
-        for ev in self.tasks.poll(snap):
+        for ev in self.tasks.poll(snapshot()):
             if ev in ("takeoff complete", "landed"):
                 self.modes.note(MD.AUTO, MD.AUTO_LOITER)
                 self.srv.heartbeat_pending = True

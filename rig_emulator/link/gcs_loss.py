@@ -2,9 +2,10 @@
 
 A ground station is a peer whose HEARTBEAT says MAV_TYPE_GCS. Once one has been heard, the
 link is *lost* when no GCS HEARTBEAT has arrived for ``failsafe.gcs_timeout`` seconds of
-wall-clock time (heartbeats are sent by the wall clock, whatever the rig's speed-up). If the
-rig is armed in a mode that needs a ground station - POSCTL, AUTO.LOITER, STABILIZED: modes
-that wait for the operator's next command - the ``failsafe.gcs_action`` runs once: ``hold``
+wall-clock time (heartbeats are sent by the wall clock, whatever the rig's speed-up),
+reported once. Then, as soon as the rig is armed in a mode that needs a ground station -
+POSCTL, AUTO.LOITER, STABILIZED: modes that wait for the operator's next command - the
+``failsafe.gcs_action`` runs, once per loss: ``hold``
 (AUTO.LOITER), ``return`` (AUTO.RTL), ``land`` (AUTO.LAND) or ``disarm``; ``none`` only
 reports. Missions, take-off, return and landing carry on (they need no one). A GCS
 HEARTBEAT again ends the loss (reported); the rig stays in the mode the action chose.
@@ -26,6 +27,7 @@ class GcsLoss:
         self.clock = clock
         self.last_heartbeat: float | None = None
         self.lost = False
+        self.acted = False  # the action ran during this loss
         self.trips = 0
 
     def heard(self, msg) -> bool:
@@ -34,31 +36,28 @@ class GcsLoss:
             return False
         self.last_heartbeat = self.clock()
         if self.lost:
-            self.lost = False
+            self.lost = self.acted = False
             return True
         return False
 
     def check(self, srv) -> None:
-        """Trip the failsafe when the ground station has been silent too long (call every loop)."""
-        if self.last_heartbeat is None or self.lost:
+        """Call every loop: report a loss once, and run the action once while the rig is armed
+        in a mode that needs a ground station during the loss."""
+        if self.last_heartbeat is None or self.acted:
             return
         cfg = srv.rig.cfg
-        silent = self.clock() - self.last_heartbeat
-        if silent <= cfg["failsafe.gcs_timeout"]:
-            return
-        self.lost = True
+        if not self.lost:
+            silent = self.clock() - self.last_heartbeat
+            if silent <= cfg["failsafe.gcs_timeout"]:
+                return
+            self.lost = True
+            srv.statustext(None, M.MAV_SEVERITY_WARNING, f"ground station lost ({silent:.0f} s without a GCS heartbeat)")
         action = cfg["failsafe.gcs_action"]
-        snap = srv.snapshot()
-        mode = (srv.modes.main, srv.modes.sub)
-        why_not = ("disarmed" if not snap.armed else "failsafe.gcs_action none" if action == "none"
-                   else None if mode in NEEDS_GCS else f"{srv.modes.name} needs no ground station")
-        if why_not is not None:
-            srv.statustext(None, M.MAV_SEVERITY_WARNING,
-                           f"ground station lost ({silent:.0f} s without a GCS heartbeat): no action, {why_not}")
+        if action == "none" or not srv.rig.armed or (srv.modes.main, srv.modes.sub) not in NEEDS_GCS:
             return
+        self.acted = True
         self.trips += 1
-        srv.statustext(None, M.MAV_SEVERITY_CRITICAL, f"ground station lost ({silent:.0f} s without a GCS heartbeat): "
-                       f"failsafe {action}")
+        srv.statustext(None, M.MAV_SEVERITY_CRITICAL, f"ground station lost in {srv.modes.name}: failsafe {action}")
         if action == "disarm":
             srv.flight.arm(False)
         else:

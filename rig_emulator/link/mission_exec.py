@@ -46,8 +46,10 @@ import math
 import numpy as np
 
 from protocol.dialect import mavlink as M
-from protocol.mission_items import MissionPlan, mission_plan
-from rig_emulator.link.modes import AUTO, AUTO_LOITER, AUTO_MISSION
+from protocol.mission_items import MissionPlan, mission_plan  # noqa: F401 - MissionPlan: the executor's type
+from dataclasses import replace as dc_replace
+
+from rig_emulator.link.modes import AUTO, AUTO_LOITER, AUTO_MISSION, AUTO_RTL
 
 ACCEPTED, DENIED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED
 UINT16_MAX = 65535
@@ -131,11 +133,32 @@ class MissionExecutor:
             self.srv.heartbeat_pending = True
 
     def _why_not(self) -> str | None:
-        if not self.rig.snapshot().armed:
+        if not self.rig.armed:
             return "mission refused: arm first"
-        if not self.items or not self._plan().size:
+        if not self.items or not (self._plan().size or self._plan().return_seq >= 0):
             return "mission refused: no mission (or no navigation item) stored"
         return None
+
+    def after_reboot(self) -> None:
+        """A reboot restarted the simulation: the stored mission stays, not started."""
+        self._flown = None
+        self._nav = 0
+        self.state = NOT_STARTED if self.items else NO_MISSION
+        self.current_seq = self._plan().first_seq if self.items and self._plan().count > self._plan().first_seq else 0
+        self.announce()
+
+    def _finish(self) -> None:
+        """The last leg is done: a NAV_RETURN_TO_LAUNCH item returns (AUTO.RTL), a final
+        NAV_LAND disarms once the land detector finds the rig on the ground."""
+        plan = self._flown
+        if plan is None:
+            return
+        if plan.return_seq >= 0:
+            self.srv.event(f"mission: item {plan.return_seq} NAV_RETURN_TO_LAUNCH, returning")
+            self.modes.enter(AUTO, AUTO_RTL, self.rig)
+            self.srv.heartbeat_pending = True
+        elif plan.size and plan.lands.shape[0] == plan.size and plan.lands[-1]:
+            self.srv.flight.tasks.watch_landing()
 
     def _refuse(self, reason: str) -> tuple[int, list]:
         return DENIED, self.srv.statustext_messages(M.MAV_SEVERITY_WARNING, reason)
@@ -155,11 +178,17 @@ class MissionExecutor:
         last = n - 1 if last is None or last == 0 or last < first else int(last)
         if last < n - 1:
             keep = [i for i, s in enumerate(plan.seqs) if s <= last]
-            plan = MissionPlan(waypoints=plan.waypoints[keep], radii=plan.radii[keep], holds=plan.holds[keep],
-                               speeds=plan.speeds[keep], free_xy=plan.free_xy[keep],
-                               seqs=tuple(plan.seqs[i] for i in keep), count=plan.count, first_seq=plan.first_seq)
+            plan = dc_replace(plan, waypoints=plan.waypoints[keep], radii=plan.radii[keep], holds=plan.holds[keep],
+                              speeds=plan.speeds[keep], free_xy=plan.free_xy[keep], lands=plan.lands[keep],
+                              seqs=tuple(plan.seqs[i] for i in keep),
+                              return_seq=plan.return_seq if plan.return_seq <= last else -1)
         index = plan.nav_index(first)
         if index is None:
+            if plan.return_seq >= first:  # nothing to fly before the return
+                self._flown, self.state = plan, COMPLETE
+                self._finish()
+                self.announce()
+                return ACCEPTED, []
             return self._refuse(f"mission refused: no navigation item in {first}..{last}")
         self._fly(plan, index, keep_reached=False)
         self.announce()
@@ -223,6 +252,7 @@ class MissionExecutor:
                 self._nav = st.index
                 if st.done:
                     self.state = COMPLETE
+                    self._finish()
         self.announce()
 
     def _report_reached(self, reached_t: np.ndarray) -> None:
@@ -233,6 +263,7 @@ class MissionExecutor:
             return
         for i in np.flatnonzero(new):
             self.srv.broadcast(M.MAVLink_mission_item_reached_message(seq=self._flown.seqs[i]))
+            self.srv.console.line(self.rig.time_s, f"mission: reached item {self._flown.seqs[i]}")
             self.reached_count += 1
         self._reported_t = reached_t.copy()
 

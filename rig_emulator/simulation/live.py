@@ -282,6 +282,11 @@ class LiveRig:
                              and self._path_kind == "task",
                              index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
 
+    @property
+    def armed(self) -> bool:
+        """Armed now (cheap: no snapshot)."""
+        return self.sim.armed
+
     # --- commanding ------------------------------------------------------------------------
     def arm(self, armed: bool = True) -> None:
         self.sim.armed = bool(armed)
