@@ -106,7 +106,10 @@ class FlightControl:
                 self.rig.hold_position()
         if not armed:
             self.tasks.cancel()
+        was_armed = self.rig.armed
         self.rig.arm(armed)
+        if armed and not was_armed and (self.modes.main, self.modes.sub) == (MD.AUTO, MD.AUTO_MISSION):
+            self.srv.mission.armed_in_mission_mode()
         return None
 
     def poll(self, snapshot) -> None:

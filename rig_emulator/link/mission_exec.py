@@ -16,7 +16,10 @@ Starting and stopping (PX4's interface, which MAVSDK and QGroundControl use):
   ``start_mission`` sends): starts a mission not started yet from the current item,
   resumes a paused one from its current item on a new virtual line from where the rig is;
   a completed mission stays complete (restart it with MISSION_START or a new current item).
-  Refused (MAV_RESULT_DENIED) when disarmed or without a mission.
+  Disarmed, the mode is taken and the mission starts when the rig is armed (PX4; what
+  QGroundControl's "start mission" expects). Refused (MAV_RESULT_DENIED) without a mission.
+* The legs end: a NAV_RETURN_TO_LAUNCH item hands over to AUTO.RTL (return, land, disarm); a
+  mission ending in NAV_LAND disarms once the land detector finds the rig on the ground.
 * Leaving AUTO.MISSION (AUTO.LOITER, POSCTL, OFFBOARD, ...) pauses: the rig holds where it
   is (the mode's own behaviour; if a mode would keep the mission running, the rig holds).
 * ``MAV_CMD_DO_SET_MISSION_CURRENT`` (param1 seq; param2 is not used) and the older
@@ -132,8 +135,8 @@ class MissionExecutor:
             self.modes.note(AUTO, AUTO_MISSION)
             self.srv.heartbeat_pending = True
 
-    def _why_not(self) -> str | None:
-        if not self.rig.armed:
+    def _why_not(self, armed_needed: bool = True) -> str | None:
+        if armed_needed and not self.rig.armed:
             return "mission refused: arm first"
         if not self.items or not (self._plan().size or self._plan().return_seq >= 0):
             return "mission refused: no mission (or no navigation item) stored"
@@ -217,11 +220,26 @@ class MissionExecutor:
         return ACCEPTED, []
 
     def _enter_mission_mode(self, rig) -> bool:
-        """FlightModes handler of AUTO.MISSION: False refuses the mode."""
-        why = self._why_not()
+        """FlightModes handler of AUTO.MISSION: False refuses the mode. Disarmed with a
+        mission, the mode is taken and the mission starts on arming (PX4; QGroundControl's
+        "start mission" switches to Mission first, then arms)."""
+        why = self._why_not(armed_needed=False)
         if why is not None:
             self.srv.statustext(None, M.MAV_SEVERITY_WARNING, why)
             return False
+        if not self.rig.armed:
+            return True
+        return self._fly_from_mode()
+
+    def armed_in_mission_mode(self) -> None:
+        """The rig was armed in AUTO.MISSION: fly (FlightControl.arm calls this)."""
+        if not self._fly_from_mode():
+            self.modes.note(AUTO, AUTO_LOITER)
+            self.rig.hold_position()
+            self.srv.heartbeat_pending = True
+        self.announce()
+
+    def _fly_from_mode(self) -> bool:
         if self.state == ACTIVE:
             return True
         if self.state == COMPLETE:

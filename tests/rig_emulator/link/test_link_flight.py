@@ -78,7 +78,7 @@ def test_heartbeat_is_px4_and_every_px4_mode_name_acts_or_is_refused_with_a_reas
     assert mavutil.interpret_px4_mode(hb.base_mode, hb.custom_mode) == "POSCTL"
     flown = {"POSCTL", "STABILIZED", "LOITER", "RTL", "LAND", "TAKEOFF", "OFFBOARD"}
     refused = {"MANUAL": "stick input", "ACRO": "stick input", "RATTITUDE": "stick input", "ALTCTL": "stick input",
-               "RTGS": "ground station's position", "FOLLOWME": "FOLLOW_TARGET", "MISSION": "arm first"}
+               "RTGS": "ground station's position", "FOLLOWME": "FOLLOW_TARGET", "MISSION": "no mission"}
     assert set(mavutil.px4_map) == flown | set(refused)  # every name pymavlink and MAVProxy list
     for name in mavutil.px4_map:
         ack = _set_mode(gcs, name)
