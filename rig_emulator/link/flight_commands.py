@@ -106,7 +106,7 @@ def set_mode(srv, main: int, sub: int):
     if not modes.supports(main, sub):
         return refuse(srv, f"mode refused: {modes.refusal(main, sub)}")
     if not modes.enter(main, sub, srv.rig):
-        return DENIED, []  # the handler sent its reason
+        return refuse(srv, modes.last_refusal)
     srv.heartbeat_pending = True
     return ACCEPTED, []
 
@@ -159,11 +159,10 @@ def reposition(cmd, srv, channel):
     if target is None:
         return refuse(srv, f"reposition refused: frame {_frame(cmd)} not supported (global frames only)",
                       UNSUPPORTED)
-    try:
-        srv.flight.tasks.goto(target, speed)
-    except ValueError as exc:
-        return refuse(srv, f"reposition refused: {exc}")
-    srv.modes.note(MD.AUTO, MD.AUTO_LOITER)
+    if target[2] < 0.0:
+        return refuse(srv, f"reposition refused: target {target[2]:.2f} m below the ground")
+    srv.modes.note(MD.AUTO, MD.AUTO_LOITER)  # first: entering a mode ends a task, this one starts after
+    srv.flight.tasks.goto(target, speed)
     srv.heartbeat_pending = True
     e, n, u = (float(v) for v in target)
     srv.event(f"reposition to E {e:.2f} N {n:.2f} U {u:.2f} m")

@@ -225,21 +225,23 @@ class MissionExecutor:
         "start mission" switches to Mission first, then arms)."""
         why = self._why_not(armed_needed=False)
         if why is not None:
-            self.srv.statustext(None, M.MAV_SEVERITY_WARNING, why)
-            return False
+            return why
         if not self.rig.armed:
             return True
         return self._fly_from_mode()
 
     def armed_in_mission_mode(self) -> None:
         """The rig was armed in AUTO.MISSION: fly (FlightControl.arm calls this)."""
-        if not self._fly_from_mode():
+        outcome = self._fly_from_mode()
+        if outcome is not True:
+            self.srv.statustext(None, M.MAV_SEVERITY_WARNING, str(outcome))
             self.modes.note(AUTO, AUTO_LOITER)
             self.rig.hold_position()
             self.srv.heartbeat_pending = True
         self.announce()
 
-    def _fly_from_mode(self) -> bool:
+    def _fly_from_mode(self) -> bool | str:
+        """Fly (or resume) from AUTO.MISSION; the reason when there is nothing to fly."""
         if self.state == ACTIVE:
             return True
         if self.state == COMPLETE:
@@ -251,8 +253,7 @@ class MissionExecutor:
             plan = self._plan()
             index = plan.nav_index(self.current_seq)
             if index is None:
-                self.srv.statustext(None, M.MAV_SEVERITY_WARNING, "mission refused: no navigation item left")
-                return False
+                return "mission refused: no navigation item left"
             self._fly(plan, index, keep_reached=False)
         return True
 

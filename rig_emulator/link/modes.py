@@ -10,8 +10,9 @@ FOLLOW_TARGET 8, PRECLAND 9).
 Every PX4 mode is in :data:`MODES`. The ones the rig flies have a handler ``enter(rig)``
 registered (:mod:`rig_emulator.link.flight_control`, :mod:`rig_emulator.link.mission_exec`,
 the offboard handler); the others carry the reason the rig refuses them
-(:meth:`FlightModes.refusal`), which the link sends as a STATUSTEXT with a DENIED ACK. A
-handler that returns ``False`` refuses the mode (the mode does not change).
+(:meth:`FlightModes.refusal`), which the link sends as a STATUSTEXT after a DENIED ACK. A
+handler that returns ``False`` or a reason (str) refuses the mode (the mode does not
+change; the reason is kept in :attr:`FlightModes.last_refusal`).
 
 Standard modes (MAV_STANDARD_MODE, :mod:`rig_emulator.link.standard_modes`): POSCTL is
 POSITION_HOLD, AUTO.MISSION MISSION, AUTO.RTL SAFE_RECOVERY, AUTO.LAND LAND, AUTO.TAKEOFF
@@ -87,6 +88,7 @@ class FlightModes:
         self.main, self.sub = POSCTL, 0
         self._enter: dict[tuple[int, int], Callable] = {}
         self.on_leave: Callable | None = None  # (old, new) after every change of mode
+        self.last_refusal = ""  # why the last enter() was refused by its handler
         self.register(OFFBOARD, 0, _keep_target)
 
     def register(self, main: int, sub: int, enter: Callable) -> None:
@@ -108,7 +110,7 @@ class FlightModes:
 
     @property
     def name(self) -> str:
-        return MODE_NAMES.get((self.main, self.sub), f"{self.main}.{self.sub}")
+        return self.name_of(self.main, self.sub)
 
     @property
     def standard_mode(self) -> int:
@@ -122,10 +124,19 @@ class FlightModes:
     def enter(self, main: int, sub: int, rig) -> bool:
         """Switch to (main, sub); False (and no change) when the mode is not supported or refused."""
         enter = self._enter.get((main, sub))
-        if enter is None or enter(rig) is False:
+        if enter is None:
+            self.last_refusal = self.refusal(main, sub)
+            return False
+        outcome = enter(rig)
+        if outcome is False or isinstance(outcome, str):
+            self.last_refusal = outcome if isinstance(outcome, str) else f"{self.name_of(main, sub)} refused"
             return False
         self.note(main, sub)
         return True
+
+    @staticmethod
+    def name_of(main: int, sub: int) -> str:
+        return MODE_NAMES.get((main, sub), f"{main}.{sub}")
 
     def note(self, main: int, sub: int) -> None:
         """Record a mode the rig is already in (e.g. OFFBOARD set by a set-point message)."""

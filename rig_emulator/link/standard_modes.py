@@ -61,7 +61,7 @@ def set_standard_mode(cmd, srv, channel):
     for (main, sub), mode in srv.modes.available():
         if std is not None and mode.standard == std and std != MD.STD_NON_STANDARD:
             if not srv.modes.enter(main, sub, srv.rig):
-                return DENIED, []  # the mode's handler sent its reason
+                return DENIED, srv.statustext_messages(M.MAV_SEVERITY_WARNING, srv.modes.last_refusal)
             srv.heartbeat_pending = True
             return ACCEPTED, []
     names = ", ".join(M.enums["MAV_STANDARD_MODE"][m.standard].name.removeprefix("MAV_STANDARD_MODE_")

@@ -8,6 +8,7 @@ name and sends each name's DO_SET_MODE the way a MAVProxy user can, ``long DO_SE
 <base> <main> <sub>`` with the numbers of pymavlink's px4_map. The results (what the rig did
 with every name) are printed."""
 
+import re
 import subprocess
 import sys
 
@@ -23,6 +24,15 @@ from .test_link_mavproxy import MAVPROXY, _Lines
 
 pytestmark = [pytest.mark.slow]
 FLOWN = {"POSCTL", "STABILIZED", "LOITER", "RTL", "LAND", "TAKEOFF", "OFFBOARD"}
+
+
+def _seen_or_wait(out, pattern, mark, timeout=3.0):
+    """A line matching ``pattern`` printed since line ``mark`` (already read or still to come)."""
+    for line in out.all[mark:]:
+        m = re.search(pattern, line)
+        if m:
+            return m
+    return out.wait_for(pattern, timeout=timeout)
 
 
 def _position(obs):
@@ -57,11 +67,13 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
             results["mode LOITER (MAVProxy's mode command)"] = "client error: " + (err.group(1) if err else "none?")
             for name in names:
                 base, main, sub = mavutil.px4_map[name]
+                mark = len(out.all)
                 send(f"long DO_SET_MODE {base} {main} {sub}")
-                ack = out.wait_for(r"(?:COMMAND_ACK|Got COMMAND_ACK).*?(ACCEPTED|DENIED|FAILED|UNSUPPORTED)")
+                ack = out.wait_for(r"Got COMMAND_ACK: DO_SET_MODE: (\w+)")
                 assert ack is not None, (name, "".join(out.all[-20:]))
-                text = out.wait_for(r"(?:AP|APM|PX4): (mode refused: .*|mission refused: .*)", timeout=3) \
-                    if ack.group(1) != "ACCEPTED" else None
+                text = None
+                if ack.group(1) != "ACCEPTED":  # the reason may come just before or after the ACK
+                    text = _seen_or_wait(out, r"AP: ((?:mode|mission) refused: .*)", mark)
                 results[f"mode {name}"] = ack.group(1) + (f" ({text.group(1).strip()})" if text else "")
                 if name in FLOWN:
                     assert ack.group(1) == "ACCEPTED", (name, results)
