@@ -50,7 +50,7 @@ def test_mavsdk_actions_fly_the_rig():
             call()
             results[name] = "Success"
         except ActionError as exc:
-            results[name] = f"{exc._result.result}"
+            results[name] = f"ActionError: {exc}"
 
     with RigProcess(speedup=SPEEDUP, extra_endpoints=["udpin:127.0.0.1:0"]) as rig:
         udp_port = next(u for u in rig.urls if u.startswith("udpin:")).rsplit(":", 1)[1]
