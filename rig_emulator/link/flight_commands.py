@@ -146,7 +146,7 @@ def reposition(cmd, srv, channel):
     flags = cmd.int_param(2)
     if flags is None or not flags & M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE:
         return refuse(srv, "reposition refused: set MAV_DO_REPOSITION_FLAGS_CHANGE_MODE (param2 = 1), as PX4 needs")
-    if not srv.snapshot().armed:
+    if not srv.rig.armed:
         return refuse(srv, "reposition refused: arm and take off first", M.MAV_RESULT_TEMPORARILY_REJECTED)
     speed = cmd.p(1)
     if speed is not None and speed <= 0.0:
@@ -213,7 +213,7 @@ def reboot(cmd, srv, channel):
     if what != 1.0:
         return refuse(srv, f"reboot refused: param1 {what:g} (only 1, reboot the autopilot, is supported)",
                       UNSUPPORTED)
-    if srv.snapshot().armed:
+    if srv.rig.armed:
         return refuse(srv, "reboot refused: disarm first")
     srv.reboot_pending = True  # the server reboots once the ACK is out
     return ACCEPTED, []
@@ -221,7 +221,7 @@ def reboot(cmd, srv, channel):
 
 def motor_test(cmd, srv, channel):
     motor, kind, value, timeout = cmd.int_param(1), cmd.int_param(2), cmd.p(3), cmd.p(4)
-    if srv.snapshot().armed:
+    if srv.rig.armed:
         return refuse(srv, "motor test refused: disarm first")
     if motor is None or not 1 <= motor <= 4:
         return refuse(srv, f"motor test refused: motor {cmd.p(1)} must be 1..4")

@@ -46,7 +46,7 @@ class FlightControl:
 
     # --- mode handlers (FlightModes: enter(rig) -> False refuses) --------------------------------
     def _armed(self) -> bool:
-        return self.srv.snapshot().armed
+        return self.rig.armed  # now, not the chunk's snapshot: an arm command may have come in since
 
     def _left_mode(self, old: tuple, new: tuple) -> None:
         """A mode other than a task's own ends the task (that mode's handler set the guidance)."""
@@ -93,7 +93,7 @@ class FlightControl:
         mode = NO_ARMING_IN.get((self.modes.main, self.modes.sub))
         if mode is not None:
             return f"not in {mode}: switch to AUTO.LOITER or POSCTL first"
-        return prearm_failure(self.srv.snapshot(), self.rig.cfg)
+        return prearm_failure(self.rig.snapshot(), self.rig.cfg)
 
     def arm(self, armed: bool, force: bool = False) -> str | None:
         """Arm (after the pre-arm checks, unless ``force``) or disarm; the refusal's reason or None."""

@@ -36,6 +36,9 @@ def _seen_or_wait(out, pattern, mark, timeout=3.0):
 
 
 def _position(obs):
+    """The rig's latest position (ENU): what queued up on the observer's socket is read first."""
+    while obs.recv_match(blocking=False) is not None:
+        pass
     m = recv(obs, "LOCAL_POSITION_NED", 5.0)
     return m.y, m.x, -m.z
 
@@ -85,7 +88,9 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
             send("takeoff 2")
             assert out.wait_for(r"Using minimum takeoff altitude") is not None
             assert out.wait_for(r"takeoff complete", timeout=60) is not None
-            results["takeoff 2"] = f"climbed to {_position(obs)[2]:.2f} m (MIS_TAKEOFF_ALT; 2 m AMSL is below home)"
+            up = _position(obs)[2]
+            assert abs(up - 2.5) < 0.2
+            results["takeoff 2"] = f"climbed to {up:.2f} m (MIS_TAKEOFF_ALT; 2 m AMSL is below home)"
             lat, lon, _ = local_enu_to_global(home, [1.0, 1.0, 0.0])
             send(f"guided {lat:.7f} {lon:.7f} 2")
             assert out.wait_for(r"arrived", timeout=60) is not None
@@ -97,16 +102,26 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
             e, n, u = _position(obs)
             assert abs(e) < 0.15 and abs(n) < 0.15 and u < 0.1
             results["long NAV_RETURN_TO_LAUNCH"] = f"returned and landed at E {e:.2f} N {n:.2f}, disarmed"
-            send("param set MIS_TAKEOFF_ALT 1.5")
+            send("param set MIS_TAKEOFF_ALT 1.5")  # MAVProxy sends it from its idle loop: read it back until set
+            for _ in range(10):
+                send("param fetch MIS_TAKEOFF_ALT")
+                got = out.wait_for(r"MIS_TAKEOFF_ALT = (\S+)", timeout=10)
+                if got is not None and float(got.group(1)) == 1.5:
+                    break
+            else:
+                raise AssertionError("MIS_TAKEOFF_ALT not set: " + "".join(out.all[-20:]))
             send("arm throttle")
             send("takeoff 0")
             assert out.wait_for(r"takeoff complete", timeout=60) is not None
-            results["param set MIS_TAKEOFF_ALT 1.5 + takeoff 0"] = f"climbed to {_position(obs)[2]:.2f} m"
+            up = _position(obs)[2]
+            assert abs(up - 1.5) < 0.2
+            results["param set MIS_TAKEOFF_ALT 1.5 + takeoff 0"] = f"climbed to {up:.2f} m"
             send("long NAV_LAND")
             assert out.wait_for(r"landed: disarmed", timeout=90) is not None
             results["long NAV_LAND"] = f"landed at {_position(obs)[2]:.2f} m, disarmed"
             send("land")  # MAVProxy's land: DO_LAND_START
             land_start = out.wait_for(r"land start refused: (.*)")
+            assert land_start is not None
             results["land (DO_LAND_START)"] = "FAILED: " + (land_start.group(1).strip() if land_start else "?")
             before_exit = "".join(out.all)
             send("exit")
