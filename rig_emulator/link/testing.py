@@ -49,6 +49,11 @@ from collections import defaultdict
 from protocol.dialect import use_hilms_dialect
 
 START_TIMEOUT_S = 240.0  # a cold numba cache compiles the step loop first (about 1-2 min under load)
+# The link's tests exercise the MAVLink services, which do not depend on the plant: they fly the
+# ideal plant (`hilms-ideal`) so that their flight checks (tolerances, recovery when level) test
+# the protocol, not the hardware rig's imperfections (those have tests of their own under
+# tests/rig_emulator/physics and simulation). Pass ``airframe=None`` for the product default.
+TEST_AIRFRAME = "hilms-ideal"
 NAN = float("nan")
 
 
@@ -190,9 +195,12 @@ class _RigBase:
 class RigProcess(_RigBase):
     """``rig-emulator serve`` as a subprocess with a tcpin endpoint on a free port."""
 
-    def __init__(self, speedup: float | str = 1.0, extra_endpoints=(), args=(), tcp: bool = True, state_dir=None):
+    def __init__(self, speedup: float | str = 1.0, extra_endpoints=(), args=(), tcp: bool = True, state_dir=None,
+                 airframe: str | None = TEST_AIRFRAME):
         endpoints = (["tcpin:127.0.0.1:0"] if tcp else []) + list(extra_endpoints)
         cmd = [sys.executable, "-m", "rig_emulator", "serve", "--speedup", str(speedup)]
+        if airframe is not None and not any(str(a).startswith("--airframe") for a in args):
+            cmd += ["--airframe", airframe]
         for ep in endpoints:
             cmd += ["--mavlink", ep]
         cmd += list(args)
@@ -250,14 +258,14 @@ class RigThread(_RigBase):
     """A :class:`RigServer` running in a daemon thread of this process."""
 
     def __init__(self, speedup: float = 1.0, extra_endpoints=(), overrides=None, scenario=None, sysid: int = 1,
-                 signing_key: bytes | None = None, state_dir=None):
+                 signing_key: bytes | None = None, state_dir=None, airframe: str = TEST_AIRFRAME):
         from rig_emulator.config.loader import load_config
         from rig_emulator.link.rig_state import RigState
         from rig_emulator.link.serve import prepare_rig
         from rig_emulator.link.server import RigServer
         from rig_emulator.link.signing import LinkSigning
 
-        cfg = load_config(scenario=scenario, overrides=overrides or {})
+        cfg = load_config(airframe=airframe, scenario=scenario, overrides=overrides or {})
         rig = prepare_rig(cfg)
         self.state = None if state_dir is None else RigState(state_dir, None)
         signing = None
