@@ -32,6 +32,7 @@ import signal
 from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.link.endpoints import EndpointError
 from rig_emulator.link.loop_timing import LoopTiming
+from rig_emulator.link.px4_simulator.serve_px4 import check_px4_args, serve_px4
 from rig_emulator.link.serve_args import MAX_INSTANCE, instance_endpoints, instance_sysid, instance_state_dir
 from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args
 from rig_emulator.link.server import RigServer
@@ -73,6 +74,7 @@ def cmd_serve(args, overrides: dict) -> int:
         raise ConfigError(f"--chunk-ms {args.chunk_ms}: must be in [0.1, 100]")
     if args.timing_log and not os.path.isdir(os.path.dirname(os.path.abspath(args.timing_log))):
         raise ConfigError(f"--timing-log {args.timing_log}: its directory does not exist")
+    check_px4_args(args)
     key, key_source = signing_key_from_args(args, _log)
     state = open_state(args, args.home)
     try:
@@ -104,12 +106,23 @@ def _serve(args, overrides: dict, state, signing) -> int:
     server.hold_clock = bool(getattr(args, "start_paused", False))
     if args.timing_log:
         server.timing = LoopTiming(server.chunk_s, args.speedup)
-    previous = {s: signal.signal(s, lambda *_: server.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
+    runner = server
+    if getattr(args, "px4_simulator", None):  # issue 16: the flight stack steps the plant (px4_simulator/)
+        try:
+            runner = serve_px4(args, server, rig, _log)
+        except ConfigError:
+            server.close()
+            raise
+    previous = {s: signal.signal(s, lambda *_: runner.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         for url in server.urls:
             print(f"rig-emulator: serving {url}", flush=True)
-        server.run(args.duration)
+        if runner is not server:
+            print(f"rig-emulator: px4 simulator on {runner.transport.url}", flush=True)
+        runner.run(args.duration)
     finally:
+        if runner is not server:
+            runner.close()
         server.close()
         if signing is not None:
             signing.close()
