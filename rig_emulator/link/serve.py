@@ -33,6 +33,7 @@ from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.link.endpoints import EndpointError
 from rig_emulator.link.loop_timing import LoopTiming
 from rig_emulator.link.px4_simulator.serve_px4 import check_px4_args, serve_px4
+from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
 from rig_emulator.link.serve_args import MAX_INSTANCE, instance_endpoints, instance_sysid, instance_state_dir
 from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args
 from rig_emulator.link.server import RigServer

@@ -290,9 +290,9 @@ class RigServer:
         self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
-        self.flight.poll(self.snapshot)
         self.offboard_loss.poll()
         self.fence.poll()
+        self.flight.poll(self.snapshot)
         self.report_faults()
         self.console.poll(self.rig.time_s, self.rig.armed, self.modes.name)
 

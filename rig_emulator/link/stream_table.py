@@ -18,9 +18,9 @@ from rig_emulator.link import telemetry_sensors as S
 from rig_emulator.link import telemetry_status as T
 from rig_emulator.link.component_metadata import component_information_message, component_metadata_message
 from rig_emulator.link.link_status import link_status
+from rig_emulator.link.telemetry_power import battery_status
 from rig_emulator.link.standard_modes import current_mode
 from rig_emulator.link.standard_modes import monitor as modes_monitor
-from rig_emulator.link.telemetry_power import battery_status
 
 
 @dataclass(frozen=True)
@@ -68,12 +68,12 @@ ON_REQUEST: dict[int, Callable] = {
     M.MAVLINK_MSG_ID_HEARTBEAT: T.heartbeat,
     M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: T.autopilot_version,
     M.MAVLINK_MSG_ID_NAMED_VALUE_INT: link_status,  # the link and loop counters (rig_emulator.link.link_status)
-    # standard modes (rig_emulator.link.standard_modes; AVAILABLE_MODES itself takes an index: commands.py)
-    M.MAVLINK_MSG_ID_CURRENT_MODE: lambda snap, ctx: current_mode(ctx.modes),
-    M.MAVLINK_MSG_ID_AVAILABLE_MODES_MONITOR: lambda snap, ctx: modes_monitor(),
     M.MAVLINK_MSG_ID_COMPONENT_METADATA: component_metadata_message,  # where the metadata files are (MAVFTP)
     M.MAVLINK_MSG_ID_COMPONENT_INFORMATION: component_information_message,
     M.MAVLINK_MSG_ID_FENCE_STATUS: lambda snap, ctx: ctx.fence.status_message(),
+    # standard modes (rig_emulator.link.standard_modes; AVAILABLE_MODES itself takes an index: commands.py)
+    M.MAVLINK_MSG_ID_CURRENT_MODE: lambda snap, ctx: current_mode(ctx.modes),
+    M.MAVLINK_MSG_ID_AVAILABLE_MODES_MONITOR: lambda snap, ctx: modes_monitor(),
     **{msg_id: s.build for msg_id, s in STREAMS.items()},
 }
 

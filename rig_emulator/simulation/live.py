@@ -13,14 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from rig_emulator.config.loader import ConfigError, RigConfig
-from rig_emulator.control.controller import (OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S, OUT_THRUST_CMD, OUT_U,
-                                             REF_MODE, REF_POS, REF_VEL, REF_YAW)
-from rig_emulator.control.controller import CS_TEST_UNTIL, CS_TEST_V
+from rig_emulator.control.controller import (CS_TEST_UNTIL, CS_TEST_V, OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S,
+                                             OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL, REF_YAW)
 from rig_emulator.guidance.offboard import (OFB_ATT, OFB_ACC, OFB_KIND, OFB_KIND_ATTITUDE, OFB_KIND_POSITION,
                                             OFB_KIND_RATES, OFB_POS, OFB_RATE, OFB_SIZE, OFB_T0, OFB_THRUST, OFB_VEL,
                                             OFB_YAW, OFB_YAW0, OFB_YAW_RATE)
 from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, OFFBOARD,
-                                         WAYPOINTS, start_at)
+                                          WAYPOINTS, start_at)
 from rig_emulator._jit import jit
 from rig_emulator.physics.hardware import motor_thrust
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed
@@ -331,6 +330,17 @@ class LiveRig:
                              and self._path_kind == "mission",
                              index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
 
+    @property
+    def controller(self):
+        """The controller plug-in flying (a :class:`rig_emulator.controllers.Controller`), or None."""
+        return self.sim.plugin.controller
+
+    @property
+    def plugin_failure(self):
+        """Why the plug-in stopped (a :class:`~rig_emulator.controllers.PluginError` naming it, the
+        time and the problem; the rig then disarmed), None while it flies. Arming clears it."""
+        return self.sim.plugin_failure
+
     def path_status(self) -> MissionStatus:
         """Where a path started with :meth:`fly_path` is (``flying`` False once anything else steers)."""
         gs = self.sim.gstate
@@ -342,17 +352,6 @@ class LiveRig:
     def armed(self) -> bool:
         """Armed now (cheap: no snapshot)."""
         return self.sim.armed
-
-    @property
-    def controller(self):
-        """The controller plug-in flying (a :class:`rig_emulator.controllers.Controller`), or None."""
-        return self.sim.plugin.controller
-
-    @property
-    def plugin_failure(self):
-        """Why the plug-in stopped (a :class:`~rig_emulator.controllers.PluginError` naming it, the
-        time and the problem; the rig then disarmed), None while it flies. Arming clears it."""
-        return self.sim.plugin_failure
 
     # --- commanding ------------------------------------------------------------------------
     def arm(self, armed: bool = True) -> None:
@@ -404,8 +403,8 @@ class LiveRig:
             gp = guidance_params(cfg)
         # keep the live guidance choice (guided target, attitude target, mission) over the config's
         return gp._replace(gtype=current.gtype, hover_position=current.hover_position, att_offset=current.att_offset,
-                           amplitude=current.amplitude, yaw=current.yaw, offboard=current.offboard,
-                           speed=self._cruise_speed(cfg))
+                           amplitude=current.amplitude, yaw=current.yaw, speed=self._cruise_speed(cfg),
+                           offboard=current.offboard)
 
     def _cruise_speed(self, cfg: RigConfig) -> float:
         return cfg["guidance.speed"] if self._speed_override is None else self._speed_override
