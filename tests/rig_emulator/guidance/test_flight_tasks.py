@@ -64,7 +64,7 @@ def test_land_here_after_a_delay_leg(rig):
     rig.fly_path([[5.0, 5.0, 0.0]], free_xy=[2.0], holds=[1.0])
     for _ in range(100):
         rig.step(10)
-    assert abs(rig.snapshot().position[2] - z0) < 0.05
+    assert abs(rig.snapshot().position[2] - z0) < 0.15  # the hardware-faithful plant holds height less tightly
     tasks.land()
     ev = _run(rig, tasks, 20.0, until="landed")
     assert ev[-1][1] == "landed" and not rig.snapshot().armed
