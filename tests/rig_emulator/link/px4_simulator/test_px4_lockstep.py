@@ -38,6 +38,7 @@ class Px4Rig:
         self.transport = open_transport(spec)
         self.lines: list[str] = []
         self.plant = LockstepPlant(self.rig, 250.0, HOME.alt_m)
+        self.plant.restart()  # compiles (cold cache) before any peer waits on it
         self.server = Px4SimulatorServer(self.ground, self.transport, self.plant, HOME, speedup=FREE_RUN_SPEEDUP,
                                          log=self.lines.append)
         self.thread = threading.Thread(target=self.server.run, daemon=True)
