@@ -12,7 +12,8 @@ SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MISSION_START and
 DO_SET_MISSION_CURRENT (:mod:`rig_emulator.link.mission_exec`), PREFLIGHT_CALIBRATION (param1,
 gyro, or param2, magnetometer, or param5, accelerometer = 1: reruns the IMU calibration
 procedure of Sec. 4-1, disarmed only), MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
-MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/FAULTS.md).
+MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/FAULTS.md),
+DO_FENCE_ENABLE (param1 0/1: the geofence off/on for this run).
 A supported command with unusable parameters is DENIED with a STATUSTEXT saying why.
 A shock outside the ranges of the config's ``disturbance.shocks`` entries (torque within
 +-100 N m, duration in (0, 10] s) is DENIED with the reason; a calibration less than
@@ -200,7 +201,19 @@ def _sensor_fault(cmd, srv, channel):
     return _act(srv, "fault", srv.rig.set_fault, device, index, mode, 0.0 if magnitude is None else magnitude)
 
 
+def _fence_enable(cmd, srv, channel):
+    """MAV_CMD_DO_FENCE_ENABLE: param1 1 enables, 0 disables the geofence (FENCE_ENABLE, for this
+    run: not stored); 2 (disable the floor only) is refused, the rig's fence has one switch."""
+    flag = cmd.int_param(1)
+    if flag not in (0, 1):
+        return _denied(srv, f"fence enable rejected: param1 {cmd.p(1)} must be 0 (disable) or 1 (enable)")
+    srv.rig.set_param("fence.enabled", bool(flag))
+    srv.broadcast(srv.params.value_message(srv.params.table.by_name["FENCE_ENABLE"]))
+    return ACCEPTED, srv.statustext_messages(M.MAV_SEVERITY_INFO, "fence enabled" if flag else "fence disabled")
+
+
 HANDLERS = {
+    M.MAV_CMD_DO_FENCE_ENABLE: _fence_enable,
     M.MAV_CMD_PREFLIGHT_CALIBRATION: _calibration,
     M.MAV_CMD_HILMS_SENSOR_FAULT: _sensor_fault,
     M.MAV_CMD_COMPONENT_ARM_DISARM: _arm,

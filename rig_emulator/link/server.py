@@ -25,18 +25,21 @@ import time
 
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home
-from rig_emulator.link import offboard, telemetry_status
+from rig_emulator.link import telemetry_status
 from rig_emulator.link.channel import Channel
 from rig_emulator.link.command_dedup import CommandDedup
 from rig_emulator.link.commands import Command, execute
 from rig_emulator.link.counters import LinkCounters
 from rig_emulator.link.endpoints import open_endpoint
 from rig_emulator.link.fault_report import FaultReporter
-from rig_emulator.link.ftp import nak_for
+from rig_emulator.link.component_metadata import metadata_files
+from rig_emulator.link.flight_monitors import FenceMonitor, OffboardLossMonitor
+from rig_emulator.link.ftp_server import FileStore, FtpServer, reply_message
 from rig_emulator.link.ideal_sensors import load_sensor_model
 from rig_emulator.link.mission_exec import MissionExecutor
 from rig_emulator.link.mission_transfer import MissionTransfer
 from rig_emulator.link.modes import FlightModes
+from rig_emulator.link.offboard_setpoints import OffboardSetpoints
 from rig_emulator.link.param_service import ParamService
 from rig_emulator.link.signing import refuse_setup_signing
 from rig_emulator.link.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
@@ -74,6 +77,11 @@ class RigServer:
         self.ctx.mission = self.mission
         self.mission_transfer = MissionTransfer(self, self.mission)
         self.fault_reporter = FaultReporter()
+        self.offboard = OffboardSetpoints(self)
+        self.offboard_loss = OffboardLossMonitor(self, self.offboard)
+        self.fence = FenceMonitor(self)
+        self.ctx.fence = self.fence
+        self.ftp = FtpServer(FileStore(metadata_files()))
         self.endpoints = []
         try:
             for spec in endpoints:
@@ -102,8 +110,7 @@ class RigServer:
             "COMMAND_LONG": lambda msg, ch: self._command(Command.from_long(msg), ch),
             "COMMAND_INT": lambda msg, ch: self._command(Command.from_int(msg), ch),
             "REQUEST_DATA_STREAM": self._request_data_stream,
-            "SET_POSITION_TARGET_LOCAL_NED": lambda msg, ch: self._setpoint(offboard.apply_position_target, msg),
-            "SET_ATTITUDE_TARGET": lambda msg, ch: self._setpoint(offboard.apply_attitude_target, msg),
+            **self.offboard.handlers(),  # SET_POSITION_TARGET_*, SET_ATTITUDE_TARGET, SET_ACTUATOR_CONTROL_TARGET
             "TIMESYNC": self._timesync,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
             "SETUP_SIGNING": lambda msg, ch: refuse_setup_signing(self, msg, ch),
@@ -168,6 +175,7 @@ class RigServer:
                     self.channels[ck].send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
                 elif event == "closed":
                     self.channels.pop(ck, None)
+                    self.ftp.forget(ck)
                 elif ck in self.channels:
                     channel = self.channels[ck]
                     for msg in channel.receive(data):
@@ -219,22 +227,19 @@ class RigServer:
         for msg_id in group_members(msg.req_stream_id):
             channel.schedule.set_rate(msg_id, hz, self.rig.time_s)
 
-    def _setpoint(self, apply, msg) -> None:
-        reason = apply(msg, self.rig, self.modes)
-        if reason is not None:
-            self.counters.drop(reason)
-
     def _timesync(self, msg, channel: Channel) -> None:
         if msg.tc1 == 0:
             now_ns = max(int(self.rig.time_s * 1e9), 1)  # tc1 = 0 would read as a request
             channel.send(M.MAVLink_timesync_message(tc1=now_ns, ts1=msg.ts1))
 
     def _ftp(self, msg, channel: Channel) -> None:
-        reply = nak_for(msg)
-        if reply is None:
+        """MAVFTP, read-only, serving the component metadata (:mod:`rig_emulator.link.ftp_server`)."""
+        replies = self.ftp.handle(bytes(msg.payload), (id(channel.endpoint), channel.key))
+        if replies is None:
             self.counters.drop("invalid")
-        else:
-            channel.send(reply)
+            return
+        for payload in replies:
+            channel.send(reply_message(payload, msg))
 
     # --- the loop ------------------------------------------------------------------------------------
     def step_chunk(self) -> None:
@@ -242,6 +247,8 @@ class RigServer:
         self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
+        self.offboard_loss.poll()
+        self.fence.poll()
         self.report_faults()
 
     def report_faults(self) -> None:

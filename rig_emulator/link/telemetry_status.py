@@ -33,6 +33,7 @@ from importlib import metadata
 from protocol.dialect import mavlink
 from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_RATE, INVALID_ACCEL, INVALID_GYRO, INVALID_MAG
 from rig_emulator.link import mavlink_units as U
+from rig_emulator.link.telemetry_power import supply_fields
 
 M = mavlink
 GYRO, ACCEL, MAG = M.MAV_SYS_STATUS_SENSOR_3D_GYRO, M.MAV_SYS_STATUS_SENSOR_3D_ACCEL, M.MAV_SYS_STATUS_SENSOR_3D_MAG
@@ -41,12 +42,14 @@ CONTROL_BITS = (M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL | M.MAV_SYS_STATUS_
                 | M.MAV_SYS_STATUS_SENSOR_YAW_POSITION | M.MAV_SYS_STATUS_SENSOR_Z_ALTITUDE_CONTROL
                 | M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL)
 ALWAYS_ON = M.MAV_SYS_STATUS_SENSOR_GPS | M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | M.MAV_SYS_STATUS_AHRS
-PRESENT = GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON | CONTROL_BITS | M.MAV_SYS_STATUS_PREARM_CHECK
+PRESENT = (GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON | CONTROL_BITS | M.MAV_SYS_STATUS_PREARM_CHECK
+           | M.MAV_SYS_STATUS_GEOFENCE)
 SENSOR_BITS = GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON
 _KINDS = ((GYRO, GYRO2, INVALID_GYRO), (ACCEL, ACCEL2, INVALID_ACCEL), (MAG, MAG2, INVALID_MAG))
 CAPABILITIES = (M.MAV_PROTOCOL_CAPABILITY_MISSION_INT | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
                 | M.MAV_PROTOCOL_CAPABILITY_MAVLINK2 | M.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
-                | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED)
+                | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
+                | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT | M.MAV_PROTOCOL_CAPABILITY_FTP)
 
 
 def _version_number(text: str) -> int:
@@ -85,9 +88,10 @@ def heartbeat(snap, ctx):
 
 def sensor_health_bits(snap, ctx) -> int:
     """SYS_STATUS health from the snapshot's fault status (mapping in the module doc)."""
-    # The rig has no geofence, so none can be breached: ground stations such as MAVProxy read a
-    # cleared GEOFENCE health bit as "fence breach" whether or not the fence is present.
+    # GEOFENCE health is cleared only while the rig is outside its fence (MAVProxy says "fence breach")
     health = SENSOR_BITS | CONTROL_BITS | M.MAV_SYS_STATUS_GEOFENCE
+    if ctx.fence is not None and ctx.fence.breached:
+        health &= ~M.MAV_SYS_STATUS_GEOFENCE
     f = snap.faults
     if f is not None:
         imu_injected = any(f.imu_faults)
@@ -111,12 +115,14 @@ def sensor_health_bits(snap, ctx) -> int:
 
 def sys_status(snap, ctx):
     enabled = PRESENT if snap.armed else PRESENT & ~CONTROL_BITS
+    if ctx.cfg["fence.enabled"]:
+        enabled |= M.MAV_SYS_STATUS_GEOFENCE
     dropped = sum(ctx.counters.dropped.values())
     total = ctx.counters.received + dropped
     return M.MAVLink_sys_status_message(
         onboard_control_sensors_present=PRESENT, onboard_control_sensors_enabled=enabled,
         onboard_control_sensors_health=sensor_health_bits(snap, ctx), load=U.clamp_int(ctx.load_fraction * 1000.0, 0, 1000),
-        voltage_battery=U.clamp_int(ctx.cfg["motors.voltage_max"] * 1000.0, 0, 65534), current_battery=-1,
+        **supply_fields(snap, ctx),  # the bench supply (telemetry_power.py)
         battery_remaining=-1, drop_rate_comm=U.clamp_int(10000.0 * dropped / total, 0, 10000) if total else 0,
         errors_comm=dropped % 65536, errors_count1=0, errors_count2=0, errors_count3=0, errors_count4=0,
         onboard_control_sensors_present_extended=0, onboard_control_sensors_enabled_extended=0,

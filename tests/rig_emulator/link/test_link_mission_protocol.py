@@ -26,7 +26,7 @@ def _wp(seq, x, y, z, frame=LOCAL, **kw):
 MISSION_A = [
     _wp(0, 0.0, 0.0, 1.0, current=1),
     MissionItem(seq=1, frame=M.MAV_FRAME_MISSION, command=M.MAV_CMD_DO_CHANGE_SPEED, param1=1.0, param2=1.5, param3=-1.0),
-    _wp(1 + 1, 1.25, -0.5, 1.0, frame=M.MAV_FRAME_LOCAL_NED, param1=0.5, param2=0.25),
+    _wp(1 + 1, 1.25, -0.5, -1.0, frame=M.MAV_FRAME_LOCAL_NED, param1=0.5, param2=0.25),  # 1 m up (NED z down)
     _wp(3, 35.7000123, 51.4000456, 2.5, frame=REL),
     MissionItem(seq=4, frame=M.MAV_FRAME_GLOBAL_INT, command=M.MAV_CMD_NAV_LAND, x=0.0, y=0.0, z=0.0),
 ]
