@@ -284,25 +284,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--omega", type=float, help="harmonic frequency in rad/s (Eq. 44)")
-                          "real_time_factor": result.real_time_factor, "failsafe": fs}))
-        return
-    print(f"scenario {args.scenario}, {label}, seed {args.seed}: "
-          f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
-    print(f"mean errors (Eq. 45) on the plant {args.airframe!r}"
-          + (" (the hardware rig; --airframe hilms-ideal for the ideal plant)" if args.airframe == "hilms" else "")
-          + ":")
-    print(format_table(rows))
-    if paper is not None and result.sim_time_s >= 60.0 - 1e-9:
-        near = [c for c in paper if math.isfinite(errors[c]) and 0.5 <= errors[c] / paper[c] <= 2.0]
-        print(f"Table 6: {len(near)} of {len(paper)} mean errors within a factor 2 of the paper's")
-    if fs is not None:
-        what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
-        print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")
-    if cfg["guidance.type"] == "waypoints":
-        done = int(np.isfinite(reached).sum())
-        times = ", ".join("-" if not np.isfinite(t) else f"{t:.2f}" for t in reached)
-        print(f"waypoints reached: {done}/{reached.size} at t = [{times}] s "
-              f"(switching radius {cfg['guidance.switching_radius']:g} m)")
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="fly a controller plug-in instead of (part of) the strategy (docs/YOUR_CONTROLLER.md)")
+    p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams); "
+                                 ".npz and .csv are streamed as the run goes (memory does not grow with --duration)")
+    p.add_argument("--start-time", metavar="WHEN",
+                   help="a .tlog's start (its record time stamps): Unix seconds or ISO 8601 (default: now, whole "
+                        "seconds). Message time stamps count simulated time from 0 whatever it is; the same "
+                        "arguments with the same --start-time give the same bytes")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     _add_config_args(p)
     p.set_defaults(func=cmd_simulate)
