@@ -168,6 +168,12 @@ SCHEMA: dict[str, Spec] = {
     "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
     "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
     "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
+    # flight tasks (guidance/flight_tasks.py): take-off, land, return (PX4's MIS_TAKEOFF_ALT, RTL_RETURN_ALT, MPC_LAND_SPEED)
+    "guidance.takeoff_altitude": F("take-off altitude above home when a take-off command gives none", "m", 0.0, 1e3,
+                                   lo_open=True),
+    "guidance.return_altitude": F("a return to home climbs to this altitude above home first if lower", "m", 0.0,
+                                  1e3, lo_open=True),
+    "guidance.land_speed": F("descent speed of a landing (land, return)", "m/s", 0.0, 10.0, lo_open=True),
     # --- MAVLink missions ------------------------------------------------------------------------
     "mission.item0_home": Spec("bool", "treat mission item 0 as home, stored but not flown (ArduPilot's "
                                "convention, for MAVProxy's wp load); false: every item is flown (PX4's)"),
@@ -249,6 +255,16 @@ SCHEMA: dict[str, Spec] = {
                             lo_open=True),
     "failsafe.on_estimate_invalid": Spec("bool", "loss of control also when the attitude estimate the controllers "
                                          "fly on is invalid (IMU majority lost or implausible) for hold_time"),
+    # pre-arm checks (simulation/prearm.py) and the ground-station loss failsafe (link/gcs_loss.py)
+    "prearm.max_tilt_deg": F("arming is refused while the roll or pitch estimate exceeds this", "deg", 0.0, 90.0,
+                             lo_open=True),
+    "prearm.max_rate_deg_s": F("arming is refused while the body-rate estimate exceeds this (the rig still turns)",
+                               "deg/s", 0.0, 1e4, lo_open=True),
+    "failsafe.gcs_timeout": F("ground station lost when no GCS HEARTBEAT arrived for this long (wall-clock)",
+                              "s", 0.0, 3600.0, lo_open=True),
+    "failsafe.gcs_action": S("on ground-station loss while armed in a mode that needs one (POSCTL, AUTO.LOITER, "
+                             "STABILIZED): 'none', 'hold', 'return', 'land' or 'disarm'",
+                             ("none", "hold", "return", "land", "disarm")),
     # --- disturbances ----------------------------------------------------------------------------
     "disturbance.wind_force": V3("constant wind force on the body (world ENU), enters Eq. 1", "N", -1e3, 1e3),
     "disturbance.torque_noise": V3("random body torque (prop wash, cable drag): standard deviation per body axis "

@@ -54,7 +54,10 @@ CS_ATT_INT = 6  # 3: attitude PID integrators
 CS_POS_INT = 9  # 3: position PID integrators
 CS_THRUST = 12  # 4: last commanded thrusts (N), for the rotor gyroscopic estimate
 CS_STARTED = 16  # 1: 0 until the first update has initialised the filters
-CS_SIZE = 17
+# actuator test, not controller state: DO_MOTOR_TEST spins motors while disarmed (simulation/live.py motor_test)
+CS_TEST_V = 17  # 4: voltage commanded to each motor during the test
+CS_TEST_UNTIL = 21  # 1: the test ends at this time (s)
+CS_SIZE = 22
 
 # controller output
 OUT_U = 0  # 4: u1 (N), u2, u3, u4 (N m, body axes, as allocated)

@@ -11,7 +11,8 @@ reached, NaN until then) live in arrays so a running rig can swap missions betwe
 Per waypoint ``i`` the guidance arguments carry: ``radii[i]`` (switching radius),
 ``holds[i]`` (hold time once reached), ``speeds[i]`` (speed of the leg that ends at ``i``;
 0 = the rig's ``speed``) and ``free_xy[i]`` (1 = the target's X and Y are where the rig is
-when the leg starts: a take-off, or a landing "here"). The target of the current leg is
+when the leg starts: a take-off, or a landing "here"; 2 = X, Y and Z: a delay or a loiter
+"here"). The target of the current leg is
 resolved once, when the leg starts, into ``gstate[GS_TARGET:GS_TARGET + 3]``.
 """
 
@@ -68,7 +69,7 @@ def _start_leg(t, pos, gp, gstate):
     else:
         gstate[GS_TARGET] = wp[i, 0]
         gstate[GS_TARGET + 1] = wp[i, 1]
-    gstate[GS_TARGET + 2] = wp[i, 2]
+    gstate[GS_TARGET + 2] = wp[i, 2] if gp.free_xy[i] != 2.0 else pos[2]  # 2: hold here (NAV_DELAY)
     speed = gp.speeds[i] if gp.speeds[i] > 0.0 else gp.speed
     gstate[GS_DURATION] = leg_duration(pos[0], pos[1], pos[2], gstate[GS_TARGET], gstate[GS_TARGET + 1],
                                        gstate[GS_TARGET + 2], speed, gp.min_leg_time)

@@ -91,6 +91,9 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "guidance.speed": ("GUI_SPEED", None),
     "guidance.switching_radius": ("WP_RADIUS", None),
     "guidance.min_leg_time": ("GUI_MIN_LEG_T", None),
+    "guidance.takeoff_altitude": ("MIS_TAKEOFF_ALT", None),  # PX4's names: MAVSDK and QGroundControl use them
+    "guidance.return_altitude": ("RTL_RETURN_ALT", None),
+    "guidance.land_speed": ("MPC_LAND_SPEED", None),
     "mission.item0_home": ("MIS_ITEM0_HOME", None),
     "mission.max_leg_m": ("MIS_DIST_WPS", None),
     "fence.enabled": ("FENCE_ENABLE", None),
@@ -120,6 +123,10 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "failsafe.rate_limit_deg_s": ("FS_RATE", None),
     "failsafe.hold_time": ("FS_HOLD_T", None),
     "failsafe.on_estimate_invalid": ("FS_ON_EST", None),
+    "failsafe.gcs_timeout": ("COM_DL_LOSS_T", None),
+    "failsafe.gcs_action": ("NAV_DLL_ACT", None),
+    "prearm.max_tilt_deg": ("ARM_MAX_TILT", None),
+    "prearm.max_rate_deg_s": ("ARM_MAX_RATE", None),
 }
 
 #: schema keys that are not parameters of a running rig, and why

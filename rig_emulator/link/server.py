@@ -28,7 +28,11 @@ from protocol.geodesy import Home
 from rig_emulator.link import telemetry_status
 from rig_emulator.link.channel import Channel
 from rig_emulator.link.command_dedup import CommandDedup
+from rig_emulator.link import standard_modes
 from rig_emulator.link.commands import Command, execute
+from rig_emulator.link.console import Console
+from rig_emulator.link.flight_control import FlightControl
+from rig_emulator.link.gcs_loss import GcsLoss
 from rig_emulator.link.counters import LinkCounters
 from rig_emulator.link.endpoints import open_endpoint
 from rig_emulator.link.fault_report import FaultReporter
@@ -55,7 +59,7 @@ STATUSTEXT_LEN = 50
 
 class RigServer:
     def __init__(self, rig, endpoints: list[str], sysid: int = 1, home: Home | None = None,
-                 speedup: float = 1.0, chunk_s: float = 0.005, signing=None, state=None):
+                 speedup: float = 1.0, chunk_s: float = 0.005, signing=None, state=None, console: bool = False):
         if not 1 <= sysid <= 255:
             raise ValueError(f"sysid {sysid}: must be 1..255")
         if not (speedup >= 0.0 and math.isfinite(speedup)):
@@ -73,6 +77,11 @@ class RigServer:
         if signing is not None:
             signing.bind(self)
         self.params = ParamService(rig, self, store=state.params if state is not None else None)
+        self.console = Console(enabled=console)
+        self.flight = FlightControl(self)  # PX4's modes on the rig's guidance, arming checks, flight tasks
+        self.ctx.flight = self.flight
+        self.gcs_loss = GcsLoss()
+        self.reboot_pending = False
         self.mission = MissionExecutor(self, store=state.mission if state is not None else None)
         self.ctx.mission = self.mission
         self.mission_transfer = MissionTransfer(self, self.mission)
@@ -98,12 +107,13 @@ class RigServer:
         self.command_dedup = CommandDedup()
         self.last_calibration = -math.inf  # wall-clock time of the last PREFLIGHT_CALIBRATION run
         self.heartbeat_pending = False
+        self.clock_rebase = False
         self._stop = False
         self._snap = None
         self._statustext_id = 0
         self._next_heartbeat = 0.0
         self._handlers = {
-            "HEARTBEAT": lambda msg, ch: None,
+            "HEARTBEAT": self._heartbeat_in,
             "PARAM_REQUEST_LIST": self.params.request_list,
             "PARAM_REQUEST_READ": self.params.request_read,
             "PARAM_SET": self.params.set,
@@ -150,12 +160,19 @@ class RigServer:
                 for seq, chunk in enumerate(chunks)]
 
     def statustext(self, channel: Channel | None, severity: int, text: str) -> None:
-        """STATUSTEXT to one peer (or all with ``None``)."""
+        """STATUSTEXT to one peer (or all with ``None``: also a console line)."""
+        if channel is None:
+            self.console.statustext(self.rig.time_s, severity, text)
         for msg in self.statustext_messages(severity, text):
             self.broadcast(msg) if channel is None else channel.send(msg)
 
+    def event(self, text: str) -> None:
+        """An event of the flight (take-off, landing, return...): STATUSTEXT INFO to every peer and the console."""
+        self.statustext(None, M.MAV_SEVERITY_INFO, text)
+
     def broadcast_heartbeat(self) -> None:
         self.broadcast(telemetry_status.heartbeat(self.rig.snapshot(), self.ctx))
+        self.broadcast(standard_modes.current_mode(self.modes))
 
     def build(self, msg_id: int) -> list:
         """The message(s) ``msg_id`` for the current state (MAV_CMD_REQUEST_MESSAGE)."""
@@ -218,9 +235,35 @@ class RigServer:
             target_system=0, target_component=0))
         for msg in follow:
             channel.send(msg)
+        if self.reboot_pending:
+            self.reboot()
         if self.heartbeat_pending:
             self.heartbeat_pending = False
             self.broadcast_heartbeat()
+
+    def _heartbeat_in(self, msg, channel: Channel) -> None:
+        if self.gcs_loss.heard(msg):
+            self.statustext(None, M.MAV_SEVERITY_INFO, "ground station regained")
+
+    def reboot(self) -> None:
+        """PREFLIGHT_REBOOT_SHUTDOWN: the simulation restarts from its initial state (time 0,
+        disarmed, POSCTL) with the parameters and the mission kept; the process, its endpoints
+        and every peer's stream rates stay."""
+        self.reboot_pending = False
+        t_old = self.rig.time_s
+        self.statustext(None, M.MAV_SEVERITY_NOTICE, "rebooting: the simulation restarts")
+        self.rig.reboot()
+        self.flight.reset()
+        self.mission.after_reboot()
+        self.fault_reporter = FaultReporter()
+        self._snap = None
+        self.clock_rebase = True
+        for ch in self.channels.values():
+            nd = ch.schedule.next_due
+            for msg_id in nd:
+                nd[msg_id] = max(0.0, nd[msg_id] - t_old)
+        self.heartbeat_pending = True
+        self.console.line(self.rig.time_s, "rebooted")
 
     def _request_data_stream(self, msg, channel: Channel) -> None:
         hz = float(msg.req_message_rate) if msg.start_stop else 0.0
@@ -249,7 +292,9 @@ class RigServer:
         self.mission.poll()
         self.offboard_loss.poll()
         self.fence.poll()
+        self.flight.poll(self.snapshot)
         self.report_faults()
+        self.console.poll(self.rig.time_s, self.rig.armed, self.modes.name)
 
     def report_faults(self) -> None:
         """STATUSTEXT for new fault injections and detections; a HEARTBEAT at once when the
@@ -298,6 +343,10 @@ class RigServer:
             t0 = time.monotonic()
             self._heartbeat_if_due(t0)
             self.service_io()
+            self.gcs_loss.check(self)
+            if self.clock_rebase:  # a reboot restarted the simulated clock
+                self.clock_rebase = False
+                wall0, sim0 = time.monotonic(), self.rig.time_s
             self.mission_transfer.tick(t0)
             if self.signing is not None:
                 self.signing.tick(t0)

@@ -19,6 +19,8 @@ from rig_emulator.link import telemetry_status as T
 from rig_emulator.link.component_metadata import component_information_message, component_metadata_message
 from rig_emulator.link.link_status import link_status
 from rig_emulator.link.telemetry_power import battery_status
+from rig_emulator.link.standard_modes import current_mode
+from rig_emulator.link.standard_modes import monitor as modes_monitor
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,9 @@ ON_REQUEST: dict[int, Callable] = {
     M.MAVLINK_MSG_ID_COMPONENT_METADATA: component_metadata_message,  # where the metadata files are (MAVFTP)
     M.MAVLINK_MSG_ID_COMPONENT_INFORMATION: component_information_message,
     M.MAVLINK_MSG_ID_FENCE_STATUS: lambda snap, ctx: ctx.fence.status_message(),
+    # standard modes (rig_emulator.link.standard_modes; AVAILABLE_MODES itself takes an index: commands.py)
+    M.MAVLINK_MSG_ID_CURRENT_MODE: lambda snap, ctx: current_mode(ctx.modes),
+    M.MAVLINK_MSG_ID_AVAILABLE_MODES_MONITOR: lambda snap, ctx: modes_monitor(),
     **{msg_id: s.build for msg_id, s in STREAMS.items()},
 }
 

@@ -1,8 +1,14 @@
 """Status messages: HEARTBEAT, SYS_STATUS, EXTENDED_SYS_STATE, SYSTEM_TIME, SERVO_OUTPUT_RAW,
 MISSION_CURRENT, and the on-request AUTOPILOT_VERSION. One builder per message, ``(snapshot, ctx) -> message``.
 
-Identity: MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_GENERIC, component MAV_COMP_ID_AUTOPILOT1; the
-flight mode is reported in PX4's custom-mode layout (:mod:`rig_emulator.link.modes`).
+Identity: MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_PX4, component MAV_COMP_ID_AUTOPILOT1: the rig
+implements PX4's flight modes and command semantics (:mod:`rig_emulator.link.modes`), so
+pymavlink/MAVProxy, MAVSDK and QGroundControl decode its mode and send PX4's commands.
+AUTOPILOT_VERSION.flight_sw_version is hilms-sil's own version (QGroundControl's PX4 plugin
+shows a "supports PX4 Pro firmware 1.4.1 and above" notice for it; nothing else depends on it).
+
+EXTENDED_SYS_STATE.landed_state: ON_GROUND while disarmed, TAKEOFF while a take-off climbs,
+LANDING while a landing descends (land detector on), else IN_AIR.
 
 Faults (docs/FAULTS.md) map onto SYS_STATUS health bits and HEARTBEAT.system_status from the
 snapshot's plain-data :class:`~rig_emulator.simulation.faults.FaultStatus`:
@@ -82,7 +88,7 @@ def heartbeat(snap, ctx):
     if snap.armed:
         base |= M.MAV_MODE_FLAG_SAFETY_ARMED
     return M.MAVLink_heartbeat_message(
-        type=M.MAV_TYPE_QUADROTOR, autopilot=M.MAV_AUTOPILOT_GENERIC, base_mode=base,
+        type=M.MAV_TYPE_QUADROTOR, autopilot=M.MAV_AUTOPILOT_PX4, base_mode=base,
         custom_mode=ctx.modes.custom_mode, system_status=system_status(snap), mavlink_version=3)
 
 
@@ -131,6 +137,12 @@ def sys_status(snap, ctx):
 
 def extended_sys_state(snap, ctx):
     landed = M.MAV_LANDED_STATE_IN_AIR if snap.armed else M.MAV_LANDED_STATE_ON_GROUND
+    tasks = ctx.flight.tasks if ctx.flight is not None else None
+    if snap.armed and tasks is not None:
+        if tasks.landing:
+            landed = M.MAV_LANDED_STATE_LANDING
+        elif tasks.task == "takeoff":
+            landed = M.MAV_LANDED_STATE_TAKEOFF
     return M.MAVLink_extended_sys_state_message(vtol_state=M.MAV_VTOL_STATE_UNDEFINED, landed_state=landed)
 
 

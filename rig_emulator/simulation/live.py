@@ -13,12 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from rig_emulator.config.loader import ConfigError, RigConfig
-from rig_emulator.control.controller import (OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S, OUT_THRUST_CMD, OUT_U,
-                                             REF_MODE, REF_POS, REF_VEL, REF_YAW)
+from rig_emulator.control.controller import (CS_TEST_UNTIL, CS_TEST_V, OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S,
+                                             OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL, REF_YAW)
 from rig_emulator.guidance.offboard import (OFB_ATT, OFB_ACC, OFB_KIND, OFB_KIND_ATTITUDE, OFB_KIND_POSITION,
                                             OFB_KIND_RATES, OFB_POS, OFB_RATE, OFB_SIZE, OFB_T0, OFB_THRUST, OFB_VEL,
                                             OFB_YAW, OFB_YAW0, OFB_YAW_RATE)
-from rig_emulator.guidance.runner import ATTITUDE, GS_DONE, GS_INDEX, GS_STARTED, HOVER, OFFBOARD, WAYPOINTS, start_at
+from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, OFFBOARD,
+                                          WAYPOINTS, start_at)
 from rig_emulator._jit import jit
 from rig_emulator.physics.hardware import motor_thrust
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed
@@ -197,7 +198,9 @@ class LiveRig:
         self._mission = None  # (waypoints, radii, holds, speeds, free_xy) stored
         self._charge_c = 0.0  # charge the bench supply delivered since start (C), see power()
         self._energy_j = 0.0
-        self._flying = None  # the same for the mission the guidance was last started on
+        self._flying = None  # the same for the mission (or task path) the guidance was last started on
+        self._path_kind = None  # what the waypoint guidance flies: "mission", "task" (fly_path) or None
+        self._speed_override = None  # m/s set by change_speed (DO_CHANGE_SPEED) until a reboot
 
     # --- stepping ----------------------------------------------------------------------
     @property
@@ -323,7 +326,8 @@ class LiveRig:
     def mission_status(self) -> MissionStatus:
         """Where the mission guidance is (cheap: no snapshot)."""
         gs = self.sim.gstate
-        return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0,
+        return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0
+                             and self._path_kind == "mission",
                              index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
 
     @property
@@ -336,6 +340,18 @@ class LiveRig:
         """Why the plug-in stopped (a :class:`~rig_emulator.controllers.PluginError` naming it, the
         time and the problem; the rig then disarmed), None while it flies. Arming clears it."""
         return self.sim.plugin_failure
+
+    def path_status(self) -> MissionStatus:
+        """Where a path started with :meth:`fly_path` is (``flying`` False once anything else steers)."""
+        gs = self.sim.gstate
+        return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0
+                             and self._path_kind == "task",
+                             index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
+
+    @property
+    def armed(self) -> bool:
+        """Armed now (cheap: no snapshot)."""
+        return self.sim.armed
 
     # --- commanding ------------------------------------------------------------------------
     def arm(self, armed: bool = True) -> None:
@@ -387,14 +403,18 @@ class LiveRig:
             gp = guidance_params(cfg)
         # keep the live guidance choice (guided target, attitude target, mission) over the config's
         return gp._replace(gtype=current.gtype, hover_position=current.hover_position, att_offset=current.att_offset,
-                           amplitude=current.amplitude, yaw=current.yaw, offboard=current.offboard)
+                           amplitude=current.amplitude, yaw=current.yaw, speed=self._cruise_speed(cfg),
+                           offboard=current.offboard)
+
+    def _cruise_speed(self, cfg: RigConfig) -> float:
+        return cfg["guidance.speed"] if self._speed_override is None else self._speed_override
 
     def set_position_target(self, position, yaw: float | None = None) -> None:
         """Guided mode: hold the given world-ENU position (and yaw, rad) from the next step."""
         gp = self.sim.gp
         self.sim.gp = gp._replace(
             gtype=HOVER,
-            hover_position=np.ascontiguousarray(position, dtype=np.float64),
+            hover_position=np.array(position, dtype=np.float64).reshape(3),
             yaw=gp.yaw if yaw is None else float(yaw),
         )
 
@@ -528,8 +548,9 @@ class LiveRig:
         if not 0 <= index < wp.shape[0]:
             raise ValueError(f"mission index {index} out of range 0..{wp.shape[0] - 1}")
         gp = guidance_params(self.cfg, *self._mission)
-        self.sim.gp = gp._replace(gtype=WAYPOINTS, yaw=self.sim.gp.yaw)
+        self.sim.gp = gp._replace(gtype=WAYPOINTS, yaw=self.sim.gp.yaw, speed=self._cruise_speed(self.cfg))
         self._flying = self._mission
+        self._path_kind = "mission"
         if not (keep_reached and self.sim.reached_t.shape[0] == wp.shape[0]):
             self.sim.reached_t = np.full(wp.shape[0], np.nan)
         start_at(index, self.sim.time, self.sim.x[0:3].copy(), self.sim.gp, self.sim.gstate)
@@ -537,6 +558,68 @@ class LiveRig:
     def hold_position(self) -> None:
         """Pause: hold the current position (e.g. a mission pause)."""
         self.set_position_target(self.sim.x[0:3].copy())
+
+    def position_now(self) -> np.ndarray:
+        """The position the controllers fly on now (the onboard estimate with the sensor
+        models on, else the physics), world ENU (m)."""
+        sp, ss = self.sim.sensing.params, self.sim.sensing.state
+        return (ss.onboard[0:3] if sp.estimated else self.sim.x[0:3]).copy()
+
+    def fly_path(self, waypoints, speeds=None, free_xy=None, holds=None) -> None:
+        """Fly a guidance path (take-off, landing, return, fly-to) on Sec. 4-4 virtual lines
+        from where the rig is now, without touching the stored mission; ``speeds`` per leg
+        (0 = the cruise speed), ``free_xy`` 1 = the leg keeps the X/Y the rig has when it
+        starts. Progress: :meth:`path_status`."""
+        wp = np.ascontiguousarray(waypoints, dtype=np.float64).reshape(-1, 3)
+        if wp.shape[0] == 0 or not np.all(np.isfinite(wp)):
+            raise ValueError("a path needs at least one finite waypoint")
+        path = (wp, None, holds, speeds, free_xy)
+        gp = guidance_params(self.cfg, *path)
+        self.sim.gp = gp._replace(gtype=WAYPOINTS, yaw=self.sim.gp.yaw, speed=self._cruise_speed(self.cfg))
+        self._flying = path
+        self._path_kind = "task"
+        self.sim.reached_t = np.full(wp.shape[0], np.nan)
+        start_at(0, self.sim.time, self.position_now(), self.sim.gp, self.sim.gstate)
+
+    def change_speed(self, speed: float | None) -> None:
+        """Cruise speed (m/s) of the waypoint legs from now on (the leg being flown restarts
+        from here at that speed); ``None`` = back to ``guidance.speed``."""
+        if speed is not None and not (0.0 < speed <= 100.0):
+            raise ValueError(f"speed {speed:g} m/s must be in (0, 100]")
+        self._speed_override = None if speed is None else float(speed)
+        gp = self.sim.gp
+        self.sim.gp = gp._replace(speed=self._cruise_speed(self.cfg))
+        gs = self.sim.gstate
+        if gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0 and gs[GS_DONE] == 0.0 and gs[GS_HOLD_UNTIL] < 0.0:
+            start_at(int(gs[GS_INDEX]), self.sim.time, self.position_now(), self.sim.gp, gs)
+
+    def motor_test(self, motor: int, fraction: float, duration: float) -> float:
+        """Bench motor test (DO_MOTOR_TEST): disarmed, command motor 1..4 to ``fraction`` of the
+        full voltage for ``duration`` s from now (the others stay at 0 V); returns the voltage."""
+        if self.sim.armed:
+            raise ValueError("motor test needs the rig disarmed")
+        if motor not in (1, 2, 3, 4) or not 0.0 <= fraction <= 1.0 or not 0.0 < duration <= 60.0:
+            raise ValueError("motor 1..4, throttle in [0, 1], duration in (0, 60] s")
+        volts = fraction * self.sim.pp.v_max
+        cs = self.sim.cstate
+        cs[CS_TEST_V : CS_TEST_V + 4] = 0.0
+        cs[CS_TEST_V + motor - 1] = volts
+        cs[CS_TEST_UNTIL] = self.sim.time + duration
+        return volts
+
+    def reboot(self) -> None:
+        """Restart the simulation from the configuration's initial state (time 0, disarmed,
+        faults and disturbances injected by command cleared), keeping the current parameters
+        and the stored mission: what MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN does to a flight
+        controller, without restarting the process."""
+        cfg = self.sim.cfg
+        self.sim = Simulation(cfg, log_capacity=self.chunk_steps_max + 1)
+        self.sim.armed = False
+        self.sim.warm_up()
+        self._flying = None
+        self._path_kind = None
+        self._speed_override = None
+        self.set_position_target(list(cfg["initial.position"]))
 
     def apply_shock(self, arm: int, torque: float, duration: float) -> None:
         """Fig. 12: a torque pulse on arm 1..4 starting now (positive pushes the tip down)."""

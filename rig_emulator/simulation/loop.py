@@ -23,6 +23,8 @@ from rig_emulator._jit import jit
 from rig_emulator.control.supervisor import F_FAILSAFE, F_INVALID, supervise
 from rig_emulator.control.controller import (
     CS_STARTED,
+    CS_TEST_UNTIL,
+    CS_TEST_V,
     OUT_ATT_DES,
     OUT_ATT_RATE_DES,
     OUT_FLAGS,
@@ -110,8 +112,8 @@ def _run_steps(
                             or k % sp.suite.cells.decim == 0):
             _sense(k, x, pp, sp, ss, rng, work[0, 10:13])
         if not armed:
-            for i in range(4):
-                v_cmd[i] = 0.0
+            for i in range(4):  # 0 V, or a motor test's voltage (DO_MOTOR_TEST, LiveRig.motor_test)
+                v_cmd[i] = cstate[CS_TEST_V + i] if t < cstate[CS_TEST_UNTIL] else 0.0
             cstate[CS_STARTED] = 0.0
         if k % ctrl_div == 0:
             if sp.simulate:

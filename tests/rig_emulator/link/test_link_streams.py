@@ -43,7 +43,7 @@ def test_heartbeat_is_one_hertz_of_wall_time(client):
     gaps = sorted(b - a for a, b in zip(arrivals, arrivals[1:]))
     assert len(gaps) == 5 and 0.75 <= gaps[2] <= 1.3, gaps  # the median gap
     hb = last
-    assert (hb.type, hb.autopilot) == (M.MAV_TYPE_QUADROTOR, M.MAV_AUTOPILOT_GENERIC)
+    assert (hb.type, hb.autopilot) == (M.MAV_TYPE_QUADROTOR, M.MAV_AUTOPILOT_PX4)
     assert hb.get_srcSystem() == 1 and hb.get_srcComponent() == M.MAV_COMP_ID_AUTOPILOT1
     assert hb.base_mode & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and not hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED
     assert hb.custom_mode == 3 << 16  # PX4 POSCTL: holding the initial position
