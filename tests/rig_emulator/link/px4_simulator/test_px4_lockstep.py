@@ -32,7 +32,7 @@ class Px4Rig:
     """A served rig in px4-simulator mode in a thread of the test process."""
 
     def __init__(self, spec: str = "127.0.0.1:0", ground: bool = False):
-        cfg = load_config(scenario="hover")
+        cfg = load_config(airframe="hilms-ideal", scenario="hover")  # the stand-in flies the ideal plant's numbers
         self.rig = prepare_rig(cfg)
         self.ground = RigServer(self.rig, ["tcpin:127.0.0.1:0"] if ground else [], home=HOME, speedup=0.0)
         self.transport = open_transport(spec)
