@@ -11,7 +11,7 @@ import time
 import pytest
 
 from gcs_tools.px4_peer import StreamLink, fly
-from rig_emulator.link.testing import RigProcess
+from rig_emulator.link.testing import START_TIMEOUT_S, RigProcess
 
 
 def _wait_line(rig, prefix: str, timeout: float = 60.0) -> str | None:
@@ -29,7 +29,7 @@ def test_serve_px4_simulator_process():
         line = _wait_line(rig, "rig-emulator: px4 simulator on tcpin:127.0.0.1:")
         assert line is not None, rig.output
         port = int(line.rsplit(":", 1)[1])
-        link = StreamLink.tcp("127.0.0.1", port)
+        link = StreamLink.tcp("127.0.0.1", port, timeout_s=START_TIMEOUT_S)  # a cold cache compiles at connect
         log = fly(link, 1.0)
         link.close()
         assert log.steps >= 250 and log.gps >= 9

@@ -32,12 +32,13 @@ class Px4Rig:
     """A served rig in px4-simulator mode in a thread of the test process."""
 
     def __init__(self, spec: str = "127.0.0.1:0", ground: bool = False):
-        cfg = load_config(scenario="hover")
+        cfg = load_config(airframe="hilms-ideal", scenario="hover")  # the stand-in flies the ideal plant's numbers
         self.rig = prepare_rig(cfg)
         self.ground = RigServer(self.rig, ["tcpin:127.0.0.1:0"] if ground else [], home=HOME, speedup=0.0)
         self.transport = open_transport(spec)
         self.lines: list[str] = []
         self.plant = LockstepPlant(self.rig, 250.0, HOME.alt_m)
+        self.plant.restart()  # compiles (cold cache) before any peer waits on it
         self.server = Px4SimulatorServer(self.ground, self.transport, self.plant, HOME, speedup=FREE_RUN_SPEEDUP,
                                          log=self.lines.append)
         self.thread = threading.Thread(target=self.server.run, daemon=True)
