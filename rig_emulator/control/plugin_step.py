@@ -103,7 +103,7 @@ def plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, d
     if pl.mode == P_POSITION:
         # the rig's attitude loop runs at the control rate; the plug-in every pl.div steps
         if ref[REF_MODE] != MODE_POSITION:
-            u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(ctrl_dt, pos, vel, phi, theta, ref, cp,
+            u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(ctrl_dt, pos, vel, phi, theta, psi, ref, cp,
                                                                               cstate, cout)
         else:
             if first or k % pl.div == 0:
@@ -123,7 +123,7 @@ def plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, d
         return True
 
     if pl.mode == P_ATTITUDE:
-        u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(ctrl_dt, pos, vel, phi, theta, ref, cp,
+        u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(ctrl_dt, pos, vel, phi, theta, psi, ref, cp,
                                                                           cstate, cout)
         obs[O_ATT_TARGET] = r0
         obs[O_ATT_TARGET + 1] = r1

@@ -26,6 +26,14 @@ from rig_emulator.simulation.sensing import build_sensing
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 
 
+def step_time_us(k: int, rate_hz: float) -> int:
+    """Time of physics step ``k`` at ``rate_hz`` in whole microseconds (exact for integer rates)."""
+    rate = float(rate_hz)
+    if rate.is_integer():
+        return (int(k) * 1_000_000) // int(rate)
+    return int(round(int(k) * 1_000_000 / rate))
+
+
 @dataclass
 class SimResult:
     """What a headless run produced: the recorded time series and its figures."""
@@ -90,6 +98,7 @@ class Simulation:
         hover_v = voltage_for_thrust(self.pp.mass * self.pp.g / 4.0, self.pp.k_v, self.pp.v_max)
         self.x[S.MOTOR_V : S.MOTOR_V + 4] = hover_v
         self.v_cmd = np.full(4, hover_v)
+        self.pp.hw.cmd_buf[:] = hover_v  # a delayed actuator starts from the hover command too
         self.cstate = np.zeros(CS_SIZE)
         self.gstate = np.zeros(GS_SIZE)
         self.reached_t = np.full(self.gp.waypoints.shape[0], np.nan)
@@ -113,6 +122,12 @@ class Simulation:
     @property
     def time(self) -> float:
         return self.k * self.dt
+
+    @property
+    def time_us(self) -> int:
+        """Simulated time in whole microseconds, from the integer step counter (what message
+        time stamps are derived from: no float clock, no rounding down of k dt)."""
+        return step_time_us(self.k, self.cfg["sim.physics_rate_hz"])
 
     def supervisor_params(self, cfg: RigConfig):
         """The supervisor's arguments for ``cfg`` (health thresholds, failsafe) on this rig's sensors."""
