@@ -33,7 +33,6 @@ from rig_emulator.control.controller import (
     OUT_U,
     OUT_UXY,
     REF_MODE,
-    REF_SIZE,
     actuate,
     attitude_stage,
     position_stage,
@@ -61,6 +60,7 @@ from rig_emulator.control.plugin_layout import (
     O_MODE,
     O_POS,
     O_REF,
+    O_REF_SIZE,
     O_RESET,
     O_T,
     O_THRUST,
@@ -206,7 +206,7 @@ def _call(k, t, period, first, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx
             obs[O_THRUST + i] = ss.thrust_est[i]
         else:
             obs[O_THRUST + i] = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
-    for i in range(REF_SIZE):
+    for i in range(O_REF_SIZE):  # ref grew past 20 (offboard entries): never into O_ATT_TARGET
         obs[O_REF + i] = ref[i]
     if not sp.estimated:
         obs[O_TRUE_VALID] = 1.0
