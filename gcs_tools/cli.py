@@ -38,7 +38,11 @@ from pathlib import Path
 
 from gcs_tools.arg_types import finite_number as _number
 from gcs_tools.errors import EXIT_OK, EXIT_USAGE, GcsError, OperationError, UsageError
+from protocol.geodesy import Home
 from protocol.mission_files import MissionFileError
+
+DEFAULT_HOME_TEXT = "35.7,51.4,1200"  # rig-emulator serve's default --home (rig_emulator/link/serve_args.py)
+DEFAULT_HOME = Home(*(float(v) for v in DEFAULT_HOME_TEXT.split(",")))
 
 PROG = "rig-gcs"
 
@@ -91,10 +95,13 @@ def _add_generator_args(p) -> None:
     g.add_argument("--spacing", type=_positive, default=0.5, help="helix waypoint spacing along the path (m): %(default)s")
     g.add_argument("--t-end", type=_positive, default=60.0, help="helix end time of Eq. 46 (s): %(default)s")
     g.add_argument("--radius", type=_positive, default=0.08, help="switching (acceptance) radius (m): %(default)s")
-    g.add_argument("--frame", choices=("local", "global"), default="local",
-                   help="write items in MAV_FRAME_LOCAL_NED (default) or GLOBAL_RELATIVE_ALT about --home")
+    g.add_argument("--frame", choices=("global", "local"), default="global",
+                   help="write items in MAV_FRAME_GLOBAL_RELATIVE_ALT about --home (default: every ground station "
+                        "reads them alike) or MAV_FRAME_LOCAL_NED (MAVProxy's wp load scales local x/y by 1e7, the "
+                        "MAVLink spec and the rig by 1e4)")
     g.add_argument("--home", type=_home, metavar="LAT,LON,ALT",
-                   help="home for --frame global (default: the vehicle's HOME_POSITION)")
+                   help="home for --frame global (default: the vehicle's HOME_POSITION; for mission make, the home "
+                        "rig-emulator serve uses by default, %s)" % DEFAULT_HOME_TEXT)
 
 
 def _generated(args, home=None):
@@ -155,7 +162,7 @@ def cmd_mission(args) -> int:
         if not args.file:
             raise UsageError("mission make needs the FILE to write")
         file_format(args.file)
-        mission = _generated(args)
+        mission = _generated(args, DEFAULT_HOME if args.frame == "global" and args.home is None else None)
         if mission is None:
             raise UsageError("mission make needs --rectangle WxH or --helix")
         save_mission(mission, args.file)

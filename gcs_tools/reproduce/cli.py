@@ -41,6 +41,11 @@ def add_parser(sub) -> None:
                    help=f"run only these experiments (repeatable, or comma-separated): {', '.join(NAMES)}")
     p.add_argument("--quick", action="store_true", help="shortened runs, fewer frequencies and masses: a smoke test, "
                                                         "not the reproduction")
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="compare a controller plug-in with the paper's controllers (Table 6, Eq. 44; "
+                        "docs/YOUR_CONTROLLER.md); alone it runs only that comparison, with --only also those")
+    p.add_argument("--strategy", default="smc-flc", choices=("smc-flc", "flc", "smc", "pid"),
+                   help="with --controller: the built-in loops the plug-in keeps (default %(default)s)")
     p.add_argument("--no-progress", action="store_true", help="no progress output on stderr")
     p.add_argument("--timing", metavar="FILE.json", help="also write the run's wall-clock and CPU time to FILE "
                                                         "(never into DIR: the report stays bit-identical)")
@@ -80,7 +85,8 @@ def cmd_reproduce(args) -> int:
     try:
         outcome = reproduce(args.output, seed=args.seed, workers=args.workers, scheduler=args.scheduler, only=only,
                             quick=args.quick, show_progress=not args.no_progress, plants=plants, seeds=args.seeds,
-                            overrides=overrides)
+                            overrides=overrides, controller=args.controller,
+                            strategy=args.strategy)
     except ConfigError as exc:
         raise UsageError(str(exc)) from None
     from rig_emulator.sweep import shutdown_pool

@@ -48,6 +48,8 @@ class Context:
         merged.update(overrides or {})
         return SimJob(scenario, strategy, seed=self.seed, duration=duration, overrides=merged,
                       airframe=self.airframe, columns=columns, label=label)
+    controller: str = ""  # a controller plug-in to compare (exp_controller), 'package.module:Name'
+    strategy: str = "smc-flc"  # the loops the plug-in keeps
 
 
 @dataclass(frozen=True)

@@ -73,7 +73,8 @@ class _Live(threading.Thread):
 
 def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=None, only=None, quick: bool = False,
               show_progress: bool = True, stream=None, plants=PLANTS, seeds: int = SEEDS,
-              overrides=None, live: bool = True) -> Outcome:
+              overrides=None, live: bool = True, controller: str | None = None,
+              strategy: str = "smc-flc") -> Outcome:
     """Run the selected experiments and write ``report.md``, ``results.json`` and the figures into ``out_dir``.
 
     Every experiment runs on each plant of ``plants`` (airframe presets; default the hardware
@@ -82,6 +83,10 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
     figures and the MAVLink flight are the first plant's first seed; the other runs' figures go
     to ``DIR/runs/PLANT-seedN/`` and their rectangle is the headless twin (``live=False``: the
     first one's too, no rig process).
+
+    ``controller`` (``package.module:Name``): also run that controller plug-in next to the paper's
+    controllers (:mod:`gcs_tools.reproduce.exp_controller`), keeping the loops of ``strategy`` it
+    does not replace; without ``only`` that comparison is all that runs.
     """
     from rig_emulator.config.loader import ConfigError
     from rig_emulator.sweep import JobFailed, run_jobs
@@ -98,7 +103,25 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
     unknown = [p for p in plants if p not in available("airframes")]
     if unknown:
         raise UsageError(f"--plant {', '.join(unknown)}: unknown; choose from {', '.join(available('airframes'))}")
-    exps, with_stability = select(only)
+    from rig_emulator.config.loader import check_config
+
+    for plant in plants:  # bad overrides are refused before anything runs
+        try:
+            check_config(plant, None, overrides or None)
+        except ConfigError as exc:
+            raise UsageError(f"--set: {exc}") from None
+    if controller:
+        from gcs_tools.reproduce import exp_controller
+        from rig_emulator.controllers import PluginError, load_controller
+
+        try:
+            load_controller(controller)  # a plug-in that cannot load is a usage error, before anything runs
+        except PluginError as exc:
+            raise UsageError(f"--controller: {exc}") from None
+        exps, with_stability = select(only) if only else ([], False)
+        exps = [exp_controller] + exps
+    else:
+        exps, with_stability = select(only)
     out = prepare_out_dir(out_dir)
     pairs = tuple(sorted((overrides or {}).items()))
     contexts = []
@@ -106,13 +129,14 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
         for s in range(seed, seed + seeds):
             primary = not contexts
             where = out if primary else out / "runs" / f"{plant}-seed{s}"
-            contexts.append(Context(seed=s, quick=quick, out_dir=where, airframe=plant, overrides=pairs))
+            contexts.append(Context(seed=s, quick=quick, out_dir=where, airframe=plant, overrides=pairs,
+                                    controller=controller or "", strategy=strategy))
     main = contexts[0]
     jobs, spans = [], {}
-    for ctx in contexts:
+    for i, ctx in enumerate(contexts):  # contexts are keyed by position (their overrides may hold lists)
         for exp in exps:
             mine = exp.jobs(ctx)
-            spans[(ctx, exp.NAME)] = (len(jobs), len(jobs) + len(mine))
+            spans[(i, exp.NAME)] = (len(jobs), len(jobs) + len(mine))
             jobs += mine
     lives = [e for e in exps if hasattr(e, "live")] if live else []
     progress = Progress(len(jobs) + len(lives) + int(with_stability), stream=stream, enabled=show_progress)
@@ -154,13 +178,13 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
                 raise t.error
             raise OperationError(f"{t.exp.NAME}: {type(t.error).__name__}: {t.error}") from t.error
     flown = {t.exp.NAME: t.result for t in threads}
-    by_ctx = {}
-    for ctx in contexts:
+    by_ctx = []
+    for i, ctx in enumerate(contexts):
         if ctx is not main:
             ctx.out_dir.mkdir(parents=True, exist_ok=True)
         secs = []
         for exp in exps:
-            a, b = spans[(ctx, exp.NAME)]
+            a, b = spans[(i, exp.NAME)]
             mine = results[a:b]
             if ctx is main and exp.NAME in flown:
                 lv = flown[exp.NAME]
@@ -169,13 +193,15 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
             else:
                 lv = None
             secs.append(exp.analyse(ctx, mine, lv))
-        by_ctx[ctx] = secs
-    columns = [PlantRuns(plant, plant, pairs, {c.seed: by_ctx[c] for c in contexts if c.airframe == plant})
+        by_ctx.append(secs)
+    columns = [PlantRuns(plant, plant, pairs, {c.seed: by_ctx[i] for i, c in enumerate(contexts) if c.airframe == plant})
                for plant in plants]
-    sections = by_ctx[main]
-    names = None if not only else [e.NAME for e in exps] + ([STABILITY] if with_stability else [])
-    files = report.write(out, sections, stab_md, stab, seed, quick, names, columns=columns, n_seeds=seeds)
+    sections = by_ctx[0]
+    names = None if not (only or controller) else [e.NAME for e in exps if e.NAME != "controller"] + (
+        [STABILITY] if with_stability else [])
+    files = report.write(out, sections, stab_md, stab, seed, quick, names, columns=columns, n_seeds=seeds,
+                         controller=controller, strategy=strategy)
     files += [out / name for s in sections for name in s.figures]
-    files += [c.out_dir / name for c in contexts if c is not main for s in by_ctx[c] for name in s.figures]
+    files += [c.out_dir / name for i, c in enumerate(contexts) if i > 0 for s in by_ctx[i] for name in s.figures]
     return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results),
                    columns=columns)

@@ -167,6 +167,16 @@ def check_value(key: str, spec: Spec, value: Any) -> Any:
         except ValueError as exc:
             raise ConfigError(f"{key}: {exc}") from None
         return dict(value)
+    if spec.kind == "params":
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{key}: must be a table of name = number or list of numbers ([{key}] in TOML)")
+        out = {}
+        for name, v in value.items():
+            if isinstance(v, list):
+                out[name] = [_check_number(f"{key}.{name}[{i}]", spec, x, integer=False) for i, x in enumerate(v)]
+            else:
+                out[name] = _check_number(f"{key}.{name}", spec, v, integer=False)
+        return out
     if spec.kind == "table_list":
         if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
             raise ConfigError(f"{key}: must be a list of tables ([[{key}]] in TOML)")

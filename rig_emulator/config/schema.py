@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 @dataclass(frozen=True)
 class Spec:
-    """One parameter: ``kind`` is float, int, str, bool, vec3, floats or table_list."""
+    """One parameter: ``kind`` is float, int, str, bool, vec3, floats, table_list, tree or params (name -> numbers)."""
 
     kind: str
     doc: str
@@ -58,6 +58,8 @@ def FS(doc, unit="", lo=-math.inf, hi=math.inf, length=None):
 
 STRATEGIES = ("smc-flc", "flc", "smc", "pid")
 GUIDANCE_TYPES = ("hover", "attitude", "helix", "waypoints")
+FENCE_ACTIONS = ("none", "warning", "hold", "return", "terminate", "land")  # PX4 GF_ACTION order
+OFFBOARD_LOSS_ACTIONS = ("land", "hold", "return", "terminate")  # PX4 COM_OBL_ACT order
 
 SCHEMA: dict[str, Spec] = {
     # --- simulation ----------------------------------------------------------------
@@ -93,8 +95,15 @@ SCHEMA: dict[str, Spec] = {
                                 "gr.F", 0.0, 2000.0),
     "motors.command_steps": I("ESC command resolution: levels over 0..voltage_max (0 = continuous)", 0, 1_000_000),
     "motors.esc_deadband_v": F("ESC dead-band: voltage commands below this give 0 V (0 = none)", "V", 0.0, 10.0),
+    "motors.kv_rpm_per_v": F("motor velocity constant KV (Sec. 4: 750 KV); sizes the current the motors draw "
+                             "from the bench supply (physics/electrical.py)", "rpm/V", 1.0, 1e5),
     # --- control ---------------------------------------------------------------------------
     "control.strategy": S("controller strategy", STRATEGIES),
+    "controller.plugin": Spec("str", "controller plug-in 'package.module:Name' flying instead of (part of) the strategy "
+                                     "(docs/YOUR_CONTROLLER.md); empty: the built-in strategy alone"),
+    "controller.params": Spec("params", "the plug-in's own parameters (name = number or list of numbers) over its defaults"),
+    "controller.call": S("how a compiled plug-in runs: 'compiled' (inside the compiled loop) or 'python' (its kernel as "
+                         "plain Python, e.g. to debug it)", ("compiled", "python")),
     "control.max_tilt_deg": F("tilt limit of the Eq. 35 singularity guard", "deg", 1.0, 80.0),
     "control.reference_time_constant": F(
         "time constant of the filter that gives desired-attitude rates and accelerations", "s", 0.0, 1.0, lo_open=True
@@ -159,9 +168,32 @@ SCHEMA: dict[str, Spec] = {
     "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
     "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
     "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
+    # flight tasks (guidance/flight_tasks.py): take-off, land, return (PX4's MIS_TAKEOFF_ALT, RTL_RETURN_ALT, MPC_LAND_SPEED)
+    "guidance.takeoff_altitude": F("take-off altitude above home when a take-off command gives none", "m", 0.0, 1e3,
+                                   lo_open=True),
+    "guidance.return_altitude": F("a return to home climbs to this altitude above home first if lower", "m", 0.0,
+                                  1e3, lo_open=True),
+    "guidance.land_speed": F("descent speed of a landing (land, return)", "m/s", 0.0, 10.0, lo_open=True),
     # --- MAVLink missions ------------------------------------------------------------------------
     "mission.item0_home": Spec("bool", "treat mission item 0 as home, stored but not flown (ArduPilot's "
                                "convention, for MAVProxy's wp load); false: every item is flown (PX4's)"),
+    "mission.max_leg_m": F("longest leg an uploaded mission may have, the first leg measured from home (PX4's "
+                           "MIS_DIST_WPS / MIS_DIST_1WP); a longer one is refused at upload", "m", 1.0, 1e7),
+    # --- geofence (protocol/mission_checks.py, link fence monitor) ------------------------------------
+    "fence.enabled": Spec("bool", "geofence on: missions reaching outside are refused at upload, a breach in flight "
+                          "triggers fence.action"),
+    "fence.action": S("on a breach, PX4's GF_ACTION codes: 'none', 'warning' (STATUSTEXT only), 'hold' (hold "
+                      "position), 'return' (return to launch), 'terminate' (motors off, disarm), 'land'",
+                      FENCE_ACTIONS),
+    "fence.radius": F("largest horizontal distance from home (ArduPilot FENCE_RADIUS)", "m", 1.0, 1e6),
+    "fence.alt_max": F("highest altitude above home (ArduPilot FENCE_ALT_MAX)", "m", -1e4, 1e5),
+    "fence.alt_min": F("lowest altitude above home (ArduPilot FENCE_ALT_MIN)", "m", -1e4, 1e5),
+    # --- offboard set-points (link offboard monitor) -------------------------------------------------
+    "offboard.loss_timeout": F("offboard set-point timeout: no set-point for this long (simulated time) in "
+                               "OFFBOARD triggers offboard.loss_action (PX4 COM_OF_LOSS_T)", "s", 0.0, 60.0,
+                               lo_open=True),
+    "offboard.loss_action": S("on an offboard set-point timeout, PX4's COM_OBL_ACT codes: 'land', 'hold', "
+                              "'return', 'terminate' (motors off, disarm)", OFFBOARD_LOSS_ACTIONS),
     # --- initial state -------------------------------------------------------------------------
     "initial.position": V3("initial virtual position (world ENU)", "m"),
     "initial.euler_deg": V3("initial phi, theta, psi", "deg", -180.0, 180.0),
@@ -223,6 +255,16 @@ SCHEMA: dict[str, Spec] = {
                             lo_open=True),
     "failsafe.on_estimate_invalid": Spec("bool", "loss of control also when the attitude estimate the controllers "
                                          "fly on is invalid (IMU majority lost or implausible) for hold_time"),
+    # pre-arm checks (simulation/prearm.py) and the ground-station loss failsafe (link/gcs_loss.py)
+    "prearm.max_tilt_deg": F("arming is refused while the roll or pitch estimate exceeds this", "deg", 0.0, 90.0,
+                             lo_open=True),
+    "prearm.max_rate_deg_s": F("arming is refused while the body-rate estimate exceeds this (the rig still turns)",
+                               "deg/s", 0.0, 1e4, lo_open=True),
+    "failsafe.gcs_timeout": F("ground station lost when no GCS HEARTBEAT arrived for this long (wall-clock)",
+                              "s", 0.0, 3600.0, lo_open=True),
+    "failsafe.gcs_action": S("on ground-station loss while armed in a mode that needs one (POSCTL, AUTO.LOITER, "
+                             "STABILIZED): 'none', 'hold', 'return', 'land' or 'disarm'",
+                             ("none", "hold", "return", "land", "disarm")),
     # --- disturbances ----------------------------------------------------------------------------
     "disturbance.wind_force": V3("constant wind force on the body (world ENU), enters Eq. 1", "N", -1e3, 1e3),
     "disturbance.torque_noise": V3("random body torque (prop wash, cable drag): standard deviation per body axis "

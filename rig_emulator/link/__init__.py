@@ -14,7 +14,8 @@ Layout (one concept per module):
 * :mod:`telemetry_*` - one builder per streamed message: snapshot -> message.
 * :mod:`streams` - which message goes out how often (per simulated time).
 * :mod:`params` / :mod:`param_service` - the parameter table and protocol.
-* :mod:`modes`, :mod:`commands`, :mod:`offboard`, :mod:`ftp` - the other microservices;
+* :mod:`modes`, :mod:`commands`, :mod:`offboard_setpoints`, :mod:`ftp_server` (+ :mod:`component_metadata`),
+  :mod:`flight_monitors` (set-point timeout, geofence) - the other microservices;
   :mod:`command_dedup` - a retried or duplicated command acts once.
 * :mod:`counters` / :mod:`link_status` - what the link received, dropped and why, and the
   loop's step counters; sent to a client on request (NAMED_VALUE_INT).

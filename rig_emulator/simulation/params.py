@@ -16,6 +16,7 @@ import numpy as np
 from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.control import fuzzy
 from rig_emulator.control.strategies import laws
+from rig_emulator.guidance.offboard import OFB_SIZE
 from rig_emulator.guidance.runner import GUIDANCE_CODES
 from rig_emulator.physics.hardware import HardwareParams
 from rig_emulator.physics.motors import GRAM_FORCE_N
@@ -38,7 +39,8 @@ ControlParams = namedtuple(
 
 GuidanceParams = namedtuple(
     "GuidanceParams",
-    "gtype hover_position yaw amplitude omega att_offset waypoints radii holds speeds free_xy speed min_leg_time",
+    "gtype hover_position yaw amplitude omega att_offset waypoints radii holds speeds free_xy speed min_leg_time "
+    "offboard",  # (OFB_SIZE,) the offboard set-point (guidance/offboard.py), used when gtype is OFFBOARD
 )
 
 Disturbances = namedtuple("Disturbances", "wind gusts shocks extra")
@@ -281,6 +283,7 @@ def guidance_params(cfg: RigConfig, waypoints=None, radii=None, holds=None, spee
         free_xy=f,
         speed=cfg["guidance.speed"],
         min_leg_time=cfg["guidance.min_leg_time"],
+        offboard=np.full(OFB_SIZE, np.nan),
     )
 
 
