@@ -169,7 +169,8 @@ def cmd_mission(args) -> int:
         print(f"wrote {len(mission.items)} items to {args.file}")
         return EXIT_OK
     if args.action == "upload":
-        needs_home_from_link = not args.file and args.frame == "global" and args.home is None
+        needs_home_from_link = (not args.file and (args.rectangle or args.helix) and args.frame == "global"
+                            and args.home is None)
         mission = None if needs_home_from_link else _mission_source(args)  # checked before connecting
         with _open_link(args) as link:
             if mission is None:
@@ -203,7 +204,8 @@ def cmd_fly(args) -> int:
     from gcs_tools.fly import fly, format_reached
     from gcs_tools.missions import waypoints_enu
 
-    needs_home_from_link = not args.file and args.frame == "global" and args.home is None
+    needs_home_from_link = (not args.file and (args.rectangle or args.helix) and args.frame == "global"
+                            and args.home is None)
     mission = None if needs_home_from_link else _mission_source(args)
     with _open_link(args) as link:
         if mission is None:

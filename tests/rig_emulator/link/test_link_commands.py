@@ -5,7 +5,7 @@ import struct
 import pytest
 
 from protocol.dialect import mavlink as M
-from rig_emulator.link import ftp
+from rig_emulator.link import ftp_server as ftp
 from rig_emulator.link.testing import NAN, command, recv
 
 ACCEPTED, DENIED, UNSUPPORTED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED
