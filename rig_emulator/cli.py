@@ -48,7 +48,7 @@ def _write_series(result, path: Path) -> None:
     """Write the run's time series as .npz, .csv or a MAVLink .tlog (the messages the live rig streams)."""
     series = result.series
     if path.suffix == ".tlog":
-        from rig_emulator.link.tlog_export import export_tlog
+        from rig_emulator.link.telemetry.tlog_export import export_tlog
 
         export_tlog(result, path)
         return

@@ -93,7 +93,7 @@ def _configure_streams(link: Link) -> None:
 def fly_rectangle(seed: int, duration_s: float, strategy: str = "smc-flc", width: float = 5.0, height: float = 3.0,
                   radius: float = 0.08) -> LiveRun:
     """Fly the Fig. 19 rectangle on a rig process over MAVLink (see the module docstring)."""
-    from rig_emulator.link.testing import RigProcess, client_url
+    from rig_emulator.testing.rig import RigProcess, client_url
 
     points = rectangle_points(width, height, ALTITUDE_M)
     mission = mission_from_enu(points, radius, "local")

@@ -8,8 +8,8 @@ faster, ``0`` or ``max`` runs as fast as possible. SIGINT/SIGTERM stop the rig c
 the bound port, so scripts can bind port 0 and read the port back.
 
 Parameters set over MAVLink and the mission are kept in ``./rig-state`` (``--state-dir``,
-``--wipe``, ``--no-persist``; :mod:`rig_emulator.link.state_dir`); ``--signing-key`` turns
-MAVLink 2 signing on (:mod:`rig_emulator.link.signing`).
+``--wipe``, ``--no-persist``; :mod:`rig_emulator.link.state.directory`); ``--signing-key`` turns
+MAVLink 2 signing on (:mod:`rig_emulator.link.signing.policy`).
 
 ``--start-paused`` holds the simulated clock at 0 until a mission is started (MISSION_START
 or AUTO.MISSION): a script uploads, arms and starts at its own pace and the flight, stamped
@@ -23,7 +23,7 @@ import os
 import signal
 
 from rig_emulator.config.loader import ConfigError, load_config
-from rig_emulator.link.endpoints import EndpointError
+from rig_emulator.link.endpoints.sockets import EndpointError
 from rig_emulator.link.loop_timing import LoopTiming
 from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
 from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args

@@ -14,7 +14,7 @@ from gcs_tools.tlog_errors import tlog_mean_errors
 from gcs_tools.tlog_read import iter_tlog
 from protocol.mean_error import COLUMNS
 from rig_emulator.api import simulate
-from rig_emulator.link.tlog_export import TlogWriter, export_tlog
+from rig_emulator.link.telemetry.tlog_export import TlogWriter, export_tlog
 
 MAVLOGDUMP = os.path.join(os.path.dirname(sys.executable), "mavlogdump.py")
 
