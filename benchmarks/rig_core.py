@@ -82,7 +82,7 @@ def _check(result, duration: float) -> None:
 
 
 def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int, inner: int,
-                       sensors: bool = True, _simulate: Callable | None = None) -> dict:
+                       sensors: bool = True, _simulate: Callable | None = None, airframe: str | None = None) -> dict:
     """Warm-up and steady-state speed of ``rig_emulator.api.simulate``.
 
     ``SimResult.mean_errors`` may be a mapping or a method returning one.
@@ -97,6 +97,8 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
     source = _source_label() if _simulate is None else "stand-in"
 
     kwargs = {} if sensors else {"overrides": {"sensors.simulate": False}}
+    if airframe is not None:  # None: the API's default plant (the hardware rig, issue 13)
+        kwargs["airframe"] = airframe
     t1 = time.perf_counter()
     first = simulate(scenario, strategy=strategy, duration=duration, seed=seed, **kwargs)
     first_call_s = time.perf_counter() - t1
@@ -133,9 +135,11 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
     return figs
 
 
-VARIANTS = {"core": False, "full": True}  # name -> sensors simulated
+VARIANTS = {"core": False, "full": True, "ideal": True}  # name -> sensors simulated
+#: name -> airframe: the default plant (the hardware rig ``hilms``, issue 13) or the ideal plant
+VARIANT_AIRFRAME = {"core": None, "full": None, "ideal": "hilms-ideal"}
 CORE_TARGETS = (Target(">=", 200.0, "issue 2"),)
-FULL_TARGETS = (Target(">=", 300.0, "issue 8"),)
+FULL_TARGETS = (Target(">=", 300.0, "issue 8"), Target(">=", 500.0, "issue 13"))
 COST_TARGETS = (Target("<=", 2.0, "issue 3"),)
 
 
@@ -148,10 +152,11 @@ for _sc in SCENARIOS:
         REGISTRY.add_probe(
             _probe_name(_sc, _variant), rig_simulate_probe,
             params={"scenario": _sc, "strategy": STRATEGY, "duration": DURATION_S, "seed": 0, "inner": 3,
-                    "sensors": _sensors},
+                    "sensors": _sensors, "airframe": VARIANT_AIRFRAME[_variant]},
             quick={"duration": QUICK_DURATION_S, "inner": 1},
             description=f"rig_emulator.api.simulate({_sc!r}, {STRATEGY!r}), 1 kHz physics, "
-                        + ("full sensing chain" if _sensors else "no sensor models (core)"),
+                        + ("full sensing chain" if _sensors else "no sensor models (core)")
+                        + (", the ideal plant (hilms-ideal)" if _variant == "ideal" else ", the hardware rig"),
         )
 
 
@@ -174,6 +179,11 @@ def rig_core(stats: dict[str, ProbeStats]) -> list[Metric]:
                                        targets=VS_ROTORPY_TARGETS))
         out.append(paired_ratio_metric(core, "rtf", s, "rtf", f"{sc}: sensing cost (core / full)",
                                        targets=COST_TARGETS))
+        ideal = stats[_probe_name(sc, "ideal")]
+        out.append(ideal.metric("rtf", f"{sc}: ideal plant (hilms-ideal) full-fidelity real-time factor",
+                                "x real time", note="the same rig without the hardware effects (issue 13)"))
+        out.append(paired_ratio_metric(s, "rtf", ideal, "rtf", f"{sc}: hardware rig speed vs the ideal plant",
+                                       note="the hardware effects' cost"))
         out.append(s.metric("rtf_end_to_end", f"{sc}: real-time factor end to end", "x real time",
                             note="timed around the whole simulate() call (setup and result "
                                  "building included)"))

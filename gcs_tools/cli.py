@@ -17,6 +17,9 @@ Commands (``rig-gcs COMMAND --help`` for each):
   of Eq. 32, the bound R2 of Eq. 31 (exit 1 when the LMI is infeasible; needs the ``analysis`` extra).
 * ``reproduce -o DIR`` - the paper's experiments, our figures and numbers next to the paper's, a
   verdict on each claim (:mod:`gcs_tools.reproduce`, docs/REPRODUCTION.md).
+* ``identify --params KEY=LO:HI,... --paper | --tlog run.tlog --scenario NAME -o fit.toml`` - fit
+  parameters of the emulated rig to the paper's numbers or to flight logs, written as a preset
+  (:mod:`gcs_tools.identify`, docs/IDENTIFY.md).
 
 CONNECTION is a pymavlink connection string: ``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``, ...
 
@@ -36,7 +39,11 @@ from pathlib import Path
 from gcs_tools.arg_types import finite_number as _number
 from gcs_tools.arg_types import positive_number as _positive
 from gcs_tools.errors import EXIT_OK, EXIT_USAGE, GcsError, OperationError, UsageError
+from protocol.geodesy import Home
 from protocol.mission_files import MissionFileError
+
+DEFAULT_HOME_TEXT = "35.7,51.4,1200"  # rig-emulator serve's default --home (rig_emulator/link/serve_args.py)
+DEFAULT_HOME = Home(*(float(v) for v in DEFAULT_HOME_TEXT.split(",")))
 
 PROG = "rig-gcs"
 
@@ -77,10 +84,13 @@ def _add_generator_args(p) -> None:
     g.add_argument("--spacing", type=_positive, default=0.5, help="helix waypoint spacing along the path (m): %(default)s")
     g.add_argument("--t-end", type=_positive, default=60.0, help="helix end time of Eq. 46 (s): %(default)s")
     g.add_argument("--radius", type=_positive, default=0.08, help="switching (acceptance) radius (m): %(default)s")
-    g.add_argument("--frame", choices=("local", "global"), default="local",
-                   help="write items in MAV_FRAME_LOCAL_NED (default) or GLOBAL_RELATIVE_ALT about --home")
+    g.add_argument("--frame", choices=("global", "local"), default="global",
+                   help="write items in MAV_FRAME_GLOBAL_RELATIVE_ALT about --home (default: every ground station "
+                        "reads them alike) or MAV_FRAME_LOCAL_NED (MAVProxy's wp load scales local x/y by 1e7, the "
+                        "MAVLink spec and the rig by 1e4)")
     g.add_argument("--home", type=_home, metavar="LAT,LON,ALT",
-                   help="home for --frame global (default: the vehicle's HOME_POSITION)")
+                   help="home for --frame global (default: the vehicle's HOME_POSITION; for mission make, the home "
+                        "rig-emulator serve uses by default, %s)" % DEFAULT_HOME_TEXT)
 
 
 def _generated(args, home=None):
@@ -139,7 +149,7 @@ def cmd_mission(args) -> int:
         if not args.file:
             raise UsageError("mission make needs the FILE to write")
         file_format(args.file)
-        mission = _generated(args)
+        mission = _generated(args, DEFAULT_HOME if args.frame == "global" and args.home is None else None)
         if mission is None:
             raise UsageError("mission make needs --rectangle WxH or --helix")
         save_mission(mission, args.file)
@@ -386,12 +396,17 @@ def build_parser() -> argparse.ArgumentParser:
     from gcs_tools.reproduce.cli import add_parser as add_reproduce_parser
 
     add_reproduce_parser(sub)  # rig-gcs reproduce -o DIR (issue 7)
+
+    from gcs_tools.identify.cli import add_parser as add_identify_parser
+
+    add_identify_parser(sub)  # rig-gcs identify (issue 13)
     return parser
 
 
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # the command line, for files that say how they were made
     if args.command == "mission" and args.action != "make" and not args.connection:
         parser.error(f"mission {args.action} needs a CONNECTION")
     if args.command == "mission" and args.action == "make" and args.connection and not args.file:

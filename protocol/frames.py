@@ -40,6 +40,11 @@ def enu_to_ned(v) -> np.ndarray:
     return np.stack([arr[..., 1], arr[..., 0], -arr[..., 2]], axis=-1)
 
 
+def enu_to_ned_xyz(e: float, n: float, u: float) -> tuple[float, float, float]:
+    """One ENU vector as three floats -> NED (n, e, -u) as floats (for per-step messages)."""
+    return float(n), float(e), -float(u)
+
+
 def ned_to_enu(v) -> np.ndarray:
     """Vectors in NED (shape (3,) or (N, 3)) to ENU: (n, e, d) -> (e, n, -d)."""
     arr = _vectors(v)
@@ -185,3 +190,23 @@ def mavlink_euler_from_quaternion(q) -> tuple[float, float, float]:
     """(roll, pitch, yaw) of a MAVLink attitude quaternion (w, x, y, z) of R_NED_FRD
     (ATTITUDE_QUATERNION, ATTITUDE_TARGET.q): the Z-Y-X angles ATTITUDE reports."""
     return _zyx_angles(rotation_from_quaternion(q))
+
+
+#: T_NED_ENU as a unit quaternion (w, x, y, z): a half turn about the axis (1, 1, 0) / sqrt(2).
+_Q_NED_ENU = (0.0, 0.5 ** 0.5, 0.5 ** 0.5, 0.0)
+
+
+def mavlink_quaternion_from_quat_wb(q_wb) -> tuple[float, float, float, float]:
+    """The MAVLink attitude quaternion (w, x, y, z) of R_NED_FRD = T_NED_ENU R_WB, w >= 0, from
+    the rig's quaternion of R_WB (scalar first): the same as :func:`mavlink_quaternion_from_rwb`
+    as a quaternion product, without building matrices (for per-step messages)."""
+    aw, ax, ay, az = _Q_NED_ENU
+    bw, bx, by, bz = (float(v) for v in q_wb)
+    w = aw * bw - ax * bx - ay * by - az * bz
+    x = aw * bx + ax * bw + ay * bz - az * by
+    y = aw * by - ax * bz + ay * bw + az * bx
+    z = aw * bz + ax * by - ay * bx + az * bw
+    n = (w * w + x * x + y * y + z * z) ** 0.5
+    if w < 0.0:
+        n = -n
+    return w / n, x / n, y / n, z / n

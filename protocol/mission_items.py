@@ -39,6 +39,16 @@ Supported commands (anything else: ``MAV_MISSION_UNSUPPORTED``):
   change, -2 = back to the rig's ``guidance.speed``; otherwise it must be in (0, 100]. The
   speed in force for a leg is that of the last DO_CHANGE_SPEED before it in sequence order,
   whichever item the mission starts from. Its frame is not used.
+* ``MAV_CMD_NAV_LOITER_TIME``: fly to the item's position (or stay where the rig is when the
+  position is unset, as for NAV_LAND) and hold there param1 seconds (>= 0); param2-4 (heading
+  required, radius, exit) are kept but not used (a multicopter loiters on the spot).
+* ``MAV_CMD_NAV_DELAY``: hold where the rig is for param1 seconds (>= 0; -1, the
+  time-of-day form, is refused); its frame and position are not used.
+* ``MAV_CMD_NAV_RETURN_TO_LAUNCH``: the mission ends here and the rig returns to home and
+  lands (its AUTO.RTL mode, as PX4 does); items after it are not flown. Frame not used.
+* ``MAV_CMD_DO_JUMP``: param1 the item to jump to, param2 how many times (0..100). The plan
+  unrolls the jumps (at most :data:`MAX_LEGS` legs), so a resumed or restarted mission
+  repeats them from the start.
 
 Frames of the position commands (anything else: ``MAV_MISSION_UNSUPPORTED_FRAME``):
 ``MAV_FRAME_GLOBAL(_INT)`` (altitude above the ellipsoid-as-AMSL, see
@@ -55,7 +65,7 @@ INVALID_PARAM7 for a non-finite altitude or a take-off below the ground.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -67,8 +77,15 @@ GLOBAL_FRAMES = frozenset({M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_INT})
 RELATIVE_FRAMES = frozenset({M.MAV_FRAME_GLOBAL_RELATIVE_ALT, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT})
 LOCAL_FRAMES = frozenset({M.MAV_FRAME_LOCAL_NED, M.MAV_FRAME_LOCAL_ENU})
 POSITION_FRAMES = GLOBAL_FRAMES | RELATIVE_FRAMES | LOCAL_FRAMES
-NAV_COMMANDS = frozenset({M.MAV_CMD_NAV_WAYPOINT, M.MAV_CMD_NAV_TAKEOFF, M.MAV_CMD_NAV_LAND})
-SUPPORTED_COMMANDS = NAV_COMMANDS | {M.MAV_CMD_DO_CHANGE_SPEED}
+NAV_COMMANDS = frozenset({M.MAV_CMD_NAV_WAYPOINT, M.MAV_CMD_NAV_TAKEOFF, M.MAV_CMD_NAV_LAND,
+                          M.MAV_CMD_NAV_LOITER_TIME, M.MAV_CMD_NAV_DELAY, M.MAV_CMD_NAV_RETURN_TO_LAUNCH})
+SUPPORTED_COMMANDS = NAV_COMMANDS | {M.MAV_CMD_DO_CHANGE_SPEED, M.MAV_CMD_DO_JUMP}
+#: items that need no position (their frame is not used)
+POSITIONLESS_COMMANDS = frozenset({M.MAV_CMD_DO_CHANGE_SPEED, M.MAV_CMD_DO_JUMP, M.MAV_CMD_NAV_DELAY,
+                                   M.MAV_CMD_NAV_RETURN_TO_LAUNCH})
+MAX_LEGS = 10_000  # legs of a plan once DO_JUMP repeats are unrolled
+MAX_JUMP_REPEAT = 100
+HOLD_XY, HOLD_XYZ = 1.0, 2.0  # free_xy codes: keep X/Y (take-off, land here), keep X/Y/Z (delay, loiter here)
 GLOBAL_SCALE = 1e7  # MISSION_ITEM_INT: degrees * 1e7
 LOCAL_SCALE = 1e4  # MISSION_ITEM_INT: metres * 1e4 (PX4's reading of the field)
 MAX_SPEED_M_S = 100.0  # guidance.speed's schema bound
@@ -165,6 +182,19 @@ def validate_item(item: MissionItem, home: Home | None = None) -> tuple[int, str
         if math.isnan(v) or v in (SPEED_NO_CHANGE, SPEED_DEFAULT) or 0.0 < v <= MAX_SPEED_M_S:
             return M.MAV_MISSION_ACCEPTED, ""
         return M.MAV_MISSION_INVALID_PARAM2, f"item {item.seq}: speed {v:g} m/s must be in (0, {MAX_SPEED_M_S:g}], -1 or -2"
+    if cmd == M.MAV_CMD_DO_JUMP:
+        target, repeat = item.param1, item.param2
+        if not (math.isfinite(target) and target >= 0 and target == int(target)):
+            return M.MAV_MISSION_INVALID_PARAM1, f"item {item.seq}: jump target {target:g} must be an item number"
+        if not (math.isfinite(repeat) and 0 <= repeat <= MAX_JUMP_REPEAT and repeat == int(repeat)):
+            return M.MAV_MISSION_INVALID_PARAM2, (f"item {item.seq}: jump repeat {repeat:g} must be a whole number in "
+                                                  f"0..{MAX_JUMP_REPEAT}")
+        return M.MAV_MISSION_ACCEPTED, ""
+    if cmd in (M.MAV_CMD_NAV_DELAY, M.MAV_CMD_NAV_LOITER_TIME):
+        if not (0.0 <= item.param1 < math.inf):
+            return M.MAV_MISSION_INVALID_PARAM1, f"item {item.seq}: time {item.param1:g} s must be >= 0"
+    if cmd in (M.MAV_CMD_NAV_DELAY, M.MAV_CMD_NAV_RETURN_TO_LAUNCH):
+        return M.MAV_MISSION_ACCEPTED, ""
     if item.frame not in POSITION_FRAMES:
         name = M.enums["MAV_FRAME"][item.frame].name if item.frame in M.enums["MAV_FRAME"] else str(item.frame)
         return M.MAV_MISSION_UNSUPPORTED_FRAME, f"item {item.seq}: frame {name} is not supported"
@@ -179,7 +209,7 @@ def validate_item(item: MissionItem, home: Home | None = None) -> tuple[int, str
         if _takeoff_up(item, home) < 0.0:
             return M.MAV_MISSION_INVALID_PARAM7, f"item {item.seq}: take-off altitude below the ground"
         return M.MAV_MISSION_ACCEPTED, ""
-    if cmd == M.MAV_CMD_NAV_LAND and _land_here(item):
+    if cmd in (M.MAV_CMD_NAV_LAND, M.MAV_CMD_NAV_LOITER_TIME) and _land_here(item):
         return M.MAV_MISSION_ACCEPTED, ""
     if item.frame in LOCAL_FRAMES:
         if not math.isfinite(item.x):
@@ -207,6 +237,8 @@ class MissionPlan:
     seqs: tuple  # mission item seq of each waypoint
     count: int  # items in the mission (including non-navigation items and a home item 0)
     first_seq: int  # first item that is flown (1 with the ArduPilot item-0 convention)
+    lands: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (N,) 1 = a landing leg (NAV_LAND)
+    return_seq: int = -1  # a NAV_RETURN_TO_LAUNCH item ends the legs: the rig returns (AUTO.RTL); -1 none
 
     @property
     def size(self) -> int:
@@ -250,9 +282,14 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
         if result != M.MAV_MISSION_ACCEPTED:
             raise ValueError(reason)
     first = 1 if item0_home else 0
-    wps, radii, holds, speeds, free, seqs = [], [], [], [], [], []
+    wps, radii, holds, speeds, free, seqs, lands = [], [], [], [], [], [], []
     speed = 0.0
-    for item in items[first:]:
+    return_seq = -1
+    jumps_left: dict[int, int] = {}
+    pc = first
+    while pc < len(items):
+        item = items[pc]
+        pc += 1
         if item.command == M.MAV_CMD_DO_CHANGE_SPEED:
             v = item.param2
             if v == SPEED_DEFAULT:
@@ -260,22 +297,44 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
             elif not (math.isnan(v) or v == SPEED_NO_CHANGE):
                 speed = float(v)
             continue
-        radius, hold, free_xy = 0.0, 0.0, 0.0
+        if item.command == M.MAV_CMD_DO_JUMP:
+            target = int(item.param1)
+            if not first <= target < len(items) or target == item.seq:
+                raise ValueError(f"item {item.seq}: jump target {target} not in {first}..{len(items) - 1} "
+                                 f"(and not itself)")
+            left = jumps_left.setdefault(item.seq, int(item.param2))
+            if left > 0:
+                jumps_left[item.seq] = left - 1
+                pc = target
+            continue
+        if item.command == M.MAV_CMD_NAV_RETURN_TO_LAUNCH:
+            return_seq = item.seq
+            break
+        radius, hold, free_xy, land = 0.0, 0.0, 0.0, 0.0
         if item.command == M.MAV_CMD_NAV_WAYPOINT:
             pos = item_position_enu(item, home)
             hold = 0.0 if math.isnan(item.param1) else item.param1
             radius = 0.0 if math.isnan(item.param2) else item.param2
         elif item.command == M.MAV_CMD_NAV_TAKEOFF:
             pos = np.array([0.0, 0.0, _takeoff_up(item, home)])
-            free_xy = 1.0
+            free_xy = HOLD_XY
             if pos[2] < 0.0:
                 raise ValueError(f"item {item.seq}: take-off altitude {item.z:g} m is below the ground")
+        elif item.command == M.MAV_CMD_NAV_DELAY:
+            pos, free_xy, hold = np.zeros(3), HOLD_XYZ, item.param1
+        elif item.command == M.MAV_CMD_NAV_LOITER_TIME:
+            hold = item.param1
+            if _land_here(item):
+                pos, free_xy = np.zeros(3), HOLD_XYZ
+            else:
+                pos = item_position_enu(item, home)
         else:  # NAV_LAND
             if _land_here(item):
-                pos, free_xy = np.zeros(3), 1.0
+                pos, free_xy = np.zeros(3), HOLD_XY
             else:
                 pos = item_position_enu(item, home)
             pos[2] = 0.0
+            land = 1.0
         if not np.all(np.isfinite(pos)):
             raise ValueError(f"item {item.seq}: position is not finite in the local frame")
         wps.append(pos)
@@ -284,10 +343,14 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
         speeds.append(speed)
         free.append(free_xy)
         seqs.append(item.seq)
+        lands.append(land)
+        if len(seqs) > MAX_LEGS:
+            raise ValueError(f"more than {MAX_LEGS} legs once the DO_JUMP repeats are unrolled")
     n = len(seqs)
     return MissionPlan(waypoints=np.asarray(wps, dtype=float).reshape(n, 3), radii=np.asarray(radii, dtype=float),
                        holds=np.asarray(holds, dtype=float), speeds=np.asarray(speeds, dtype=float),
-                       free_xy=np.asarray(free, dtype=float), seqs=tuple(seqs), count=len(items), first_seq=first)
+                       free_xy=np.asarray(free, dtype=float), seqs=tuple(seqs), count=len(items), first_seq=first,
+                       lands=np.asarray(lands, dtype=float), return_seq=return_seq)
 
 
 # --- the rig's mission -> items (ground tools, tests) ----------------------------------------------

@@ -20,9 +20,15 @@ def simulate(
     seed: int = 0,
     airframe: str = "hilms",
     files=(),
+    controller=None,
     **overrides: Any,
 ) -> SimResult:
     """Run a scenario preset headless and return its :class:`SimResult`.
+
+    ``controller``: a controller plug-in flying instead of (part of) the strategy: an instance
+    or class of :class:`rig_emulator.controllers.Controller`, or ``"package.module:Name"``
+    (docs/YOUR_CONTROLLER.md). A plug-in that fails raises
+    :class:`~rig_emulator.controllers.PluginError` naming it, the time and the problem.
 
     ``overrides`` are dotted parameter keys with dots written as double underscores
     (``smc__switching="boundary"``) or passed in a dict as ``overrides={"smc.switching": ...}``.
@@ -34,4 +40,4 @@ def simulate(
     if duration is not None:
         flat["sim.duration"] = float(duration)
     cfg = load_config(airframe=airframe, scenario=scenario, files=files, overrides=flat)
-    return Simulation(cfg).run()
+    return Simulation(cfg, controller=controller).run()

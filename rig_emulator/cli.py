@@ -1,28 +1,35 @@
 """``rig-emulator``: the rig's command line.
 
 * ``rig-emulator simulate --scenario NAME --strategy NAME --duration S --seed N [--out FILE]``
-  runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors.
+  runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors;
+  ``--controller package.module:Name`` flies a controller plug-in (docs/YOUR_CONTROLLER.md).
 * ``rig-emulator params [--scenario NAME]`` lists every parameter with its value, unit and range.
 * ``rig-emulator scenarios`` lists the scenario and airframe presets.
 * ``rig-emulator serve [--mavlink URL ...] [--speedup X] ...`` (also ``rig-emulator`` with no
   subcommand) runs the rig and serves MAVLink (see :mod:`rig_emulator.link.serve`).
 
-Exit codes: 0 success, 2 bad arguments or configuration.
+Exit codes: 0 success, 2 bad arguments or configuration, or a controller plug-in that failed.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import math
+import shutil
+import signal
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 
 from protocol.mean_error import PAPER_TABLE_6, format_table
 from rig_emulator.config.loader import ConfigError, available, load_config, parse_override
+from rig_emulator.compile_notice import compile_notice
 from rig_emulator.config.schema import SCHEMA, STRATEGIES
+from rig_emulator.controllers.base import PluginError
 from rig_emulator.link.serve_args import add_serve_args
 
 
@@ -44,48 +51,48 @@ def _overrides(args) -> dict:
     return out
 
 
-def _write_series(result, path: Path) -> None:
-    """Write the run's time series as .npz, .csv or a MAVLink .tlog (the messages the live rig streams)."""
-    series = result.series
-    if path.suffix == ".tlog":
-        from rig_emulator.link.telemetry.tlog_export import export_tlog
-
-        export_tlog(result, path)
-        return
-    if path.suffix == ".npz":
-        np.savez_compressed(path, **series)
-        return
-    if path.suffix == ".csv":
-        cols, names = [], []
-        for name, arr in series.items():
-            arr = np.asarray(arr)
-            if arr.ndim == 1:
-                cols.append(arr)
-                names.append(name)
-            else:
-                for i in range(arr.shape[1]):
-                    cols.append(arr[:, i])
-                    names.append(f"{name}_{i}")
-        np.savetxt(path, np.column_stack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.9g")
-        return
-    raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz, .csv or .tlog")
+TLOG_BYTES_PER_ROW = 700  # about eleven messages a log row
 
 
-def _failsafe_summary(result) -> dict | None:
-    """When and why the loss-of-control failsafe tripped in a headless run (None: it did not)."""
-    from rig_emulator.simulation.faults import failsafe_cause_text
-
-    fs = result.series["failsafe"]
-    if not np.any(fs > 0):
+def _parse_start_time(text: str | None) -> float | None:
+    """``--start-time``: Unix seconds, or an ISO 8601 date and time (UTC unless it names its offset)."""
+    if text is None:
         return None
-    i = int(np.argmax(fs > 0))
-    return {"t_s": float(result.series["t"][i]), "cause": failsafe_cause_text(int(fs[i])),
-            "action": result.config["failsafe.action"]}
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    try:
+        when = datetime.datetime.fromisoformat(text.strip())
+    except ValueError:
+        raise ConfigError(f"--start-time {text!r}: expected Unix seconds or an ISO 8601 time such as "
+                          "2026-11-23T09:00:00Z") from None
+    if when.tzinfo is None:
+        when = when.replace(tzinfo=datetime.timezone.utc)
+    return when.timestamp()
+
+
+def _series_writer(path: Path, n_rows: int, cfg, start_unix_s: float | None):
+    """The writer for ``--out``, after checking that the file's directory exists and has room for
+    the run (refused before anything runs)."""
+    from rig_emulator.headless.series_files import WRITERS, bytes_per_row
+
+    if path.suffix not in (*WRITERS, ".tlog"):
+        raise ConfigError(f"--out {path}: unsupported file type {path.suffix!r}; use .npz, .csv or .tlog")
+    if not path.parent.is_dir():
+        raise ConfigError(f"--out {path}: directory {str(path.parent)!r} does not exist")
+    need = n_rows * (TLOG_BYTES_PER_ROW if path.suffix == ".tlog" else bytes_per_row(path.suffix))
+    free = shutil.disk_usage(path.parent).free
+    if need > free:
+        raise ConfigError(f"--out {path}: the run records {n_rows} rows, about {need / 2**30:.1f} GiB while it is "
+                          f"written, and {str(path.parent)!r} has {free / 2**30:.1f} GiB free; shorten --duration or "
+                          "lower sim.log_rate_hz (e.g. --set sim.log_rate_hz=10)")
+    if path.suffix == ".tlog":
+        return None  # exported from the whole run (_simulate_to_tlog)
+    return WRITERS[path.suffix](path)
 
 
 def cmd_simulate(args) -> int:
-    from rig_emulator.simulation.run import Simulation
-
     overrides = _overrides(args)
     overrides["control.strategy"] = args.strategy
     overrides["sim.seed"] = args.seed
@@ -93,42 +100,125 @@ def cmd_simulate(args) -> int:
         overrides["sim.duration"] = args.duration
     if args.omega is not None:
         overrides["guidance.omega"] = args.omega
+    if args.controller:
+        overrides["controller.plugin"] = args.controller
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
-    sim = Simulation(cfg)
+    out = Path(args.out) if args.out else None
+    start = _parse_start_time(args.start_time)
+    if out is not None and out.suffix == ".tlog":
+        return _simulate_to_tlog(args, cfg, out, start)
+    return _simulate_streamed(args, cfg, out, start)
+
+
+def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
+    """A .tlog is still exported from the whole run held in memory (not streamed yet); its
+    records are stamped from ``start_unix_s`` (default: now, whole seconds)."""
+    from rig_emulator.link.telemetry.tlog_export import export_tlog
+    from rig_emulator.simulation.faults import failsafe_cause_text
+    from rig_emulator.simulation.run import Simulation
+
+    n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"]))
+               // int(round(cfg["sim.physics_rate_hz"] / cfg["sim.log_rate_hz"])))
+    _series_writer(out, n_rows, cfg, start_unix_s)  # the checks: directory, free space
+    with compile_notice():
+        sim = Simulation(cfg)
+        sim.warm_up()
     result = sim.run()
-    errors = result.mean_errors()
-    rows = {args.strategy: errors}
-    if args.scenario == "helix" and args.strategy in PAPER_TABLE_6:
-        rows[f"paper {args.strategy}"] = PAPER_TABLE_6[args.strategy]
+    fs = result.series["failsafe"]
+    failsafe = None
+    if np.any(fs > 0):
+        i = int(np.argmax(fs > 0))
+        failsafe = (float(result.series["t"][i]), failsafe_cause_text(int(fs[i])))
+    _print_summary(args, cfg, result, result.mean_errors(), result.reached_t, failsafe)
+    export_tlog(result, out, epoch_s=float(int(time.time())) if start_unix_s is None else start_unix_s)
+    return 0
+
+
+def _simulate_streamed(args, cfg, out: Path | None, start_unix_s: float | None) -> int:
+    """Run in chunks (memory bounded whatever the duration), the series streamed to ``--out``;
+    Ctrl-C ends the run after the current chunk, keeps what was simulated and exits 130."""
+    from rig_emulator.simulation.faults import failsafe_cause_text
+    from rig_emulator.headless.streamed import StreamedRun
+
+    with compile_notice():
+        run = StreamedRun(cfg)
+        run.warm_up()
+    n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"])) // run.sim.log_div)
+    writer = _series_writer(out, n_rows, cfg, start_unix_s) if out is not None else None
+    previous = signal.signal(signal.SIGINT, lambda *_: run.request_stop())
+    try:
+        result = run.run([writer] if writer is not None else [])
+    except BaseException:
+        if writer is not None:
+            writer.abort()
+        raise
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if writer is not None:
+        writer.commit()
+    if result.interrupted:
+        kept = f"; {result.rows} rows written to {out}" if writer is not None else ""
+        print(f"rig-emulator: interrupted at t = {result.sim_time_s:.3f} s of {cfg['sim.duration']:g} s{kept}",
+              file=sys.stderr, flush=True)
+        return 130
+    fs = None if result.failsafe is None else (result.failsafe[0], failsafe_cause_text(result.failsafe[1]))
+    _print_summary(args, cfg, result, result.mean_errors, result.reached_t, fs)
+    return 0
+
+
+def _print_summary(args, cfg, result, errors: dict, reached, failsafe) -> None:
+    """The figures of a finished run: mean errors (Eq. 45), failsafe, waypoints (text or --json)."""
+    label = f"{_controller_label(cfg, args.strategy)} ({args.airframe})"
+    rows = {label: errors}
+    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" else None
+    if paper is not None:
+        rows[f"paper {args.strategy}"] = paper
+    fs = None if failsafe is None else {"t_s": failsafe[0], "cause": failsafe[1], "action": cfg["failsafe.action"]}
     if args.json:
         print(json.dumps({"scenario": args.scenario, "strategy": args.strategy, "seed": args.seed,
+                          "controller": cfg["controller.plugin"] or None,
                           "mean_errors": {k: (None if not math.isfinite(v) else v) for k, v in errors.items()},
                           "sim_time_s": result.sim_time_s, "wall_time_s": result.wall_time_s,
-                          "real_time_factor": result.real_time_factor, "failsafe": _failsafe_summary(result)}))
-    else:
-        print(f"scenario {args.scenario}, strategy {args.strategy}, seed {args.seed}: "
-              f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
-        print("mean errors (Eq. 45):")
-        print(format_table(rows))
-        fs = _failsafe_summary(result)
-        if fs is not None:
-            what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
-            print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")
-        if cfg["guidance.type"] == "waypoints":
-            reached = result.reached_t
-            done = int(np.isfinite(reached).sum())
-            times = ", ".join("-" if not np.isfinite(t) else f"{t:.2f}" for t in reached)
-            print(f"waypoints reached: {done}/{reached.size} at t = [{times}] s "
-                  f"(switching radius {cfg['guidance.switching_radius']:g} m)")
-    if args.out:
-        _write_series(result, Path(args.out))
-    return 0
+                          "real_time_factor": result.real_time_factor, "failsafe": fs}))
+        return
+    print(f"scenario {args.scenario}, {label}, seed {args.seed}: "
+          f"{result.sim_time_s:g} s simulated in {result.wall_time_s:.3f} s ({result.real_time_factor:.0f}x real time)")
+    print(f"mean errors (Eq. 45) on the plant {args.airframe!r}"
+          + (" (the hardware rig; --airframe hilms-ideal for the ideal plant)" if args.airframe == "hilms" else "")
+          + ":")
+    print(format_table(rows))
+    if paper is not None and result.sim_time_s >= 60.0 - 1e-9:
+        near = [c for c in paper if math.isfinite(errors[c]) and 0.5 <= errors[c] / paper[c] <= 2.0]
+        print(f"Table 6: {len(near)} of {len(paper)} mean errors within a factor 2 of the paper's")
+    if fs is not None:
+        what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
+        print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")
+    if cfg["guidance.type"] == "waypoints":
+        done = int(np.isfinite(reached).sum())
+        times = ", ".join("-" if not np.isfinite(t) else f"{t:.2f}" for t in reached)
+        print(f"waypoints reached: {done}/{reached.size} at t = [{times}] s "
+              f"(switching radius {cfg['guidance.switching_radius']:g} m)")
+
+
+def _controller_label(cfg, strategy: str) -> str:
+    """Who flew: the strategy, or the plug-in and what of the strategy it kept."""
+    plugin = cfg["controller.plugin"]
+    if not plugin:
+        return f"strategy {strategy}"
+    from rig_emulator.controllers import load_controller
+
+    replaces = load_controller(plugin).replaces
+    kept = {"both": "", "attitude": f" + position loop of {strategy}", "position": f" + attitude loop of {strategy}"}
+    return f"controller {plugin}{kept[replaces]}"
 
 
 def cmd_serve(args) -> int:
     from rig_emulator.link.serve import cmd_serve as serve
 
-    return serve(args, _overrides(args))
+    overrides = _overrides(args)
+    if args.controller:
+        overrides["controller.plugin"] = args.controller
+    return serve(args, overrides)
 
 
 def cmd_calibrate(args) -> int:
@@ -183,6 +273,9 @@ def build_parser() -> argparse.ArgumentParser:
                                      "the mission in ./rig-state; optional MAVLink 2 signing (see serve --help)")
     add_serve_args(p)
     _add_config_args(p)
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="fly a controller plug-in instead of (part of) the strategy; its parameters are served "
+                        "under its prefix; a failing plug-in trips the failsafe (docs/YOUR_CONTROLLER.md)")
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser("simulate", help="run a scenario headless and print the mean errors")
@@ -191,7 +284,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--omega", type=float, help="harmonic frequency in rad/s (Eq. 44)")
-    p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams)")
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="fly a controller plug-in instead of (part of) the strategy (docs/YOUR_CONTROLLER.md)")
+    p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams); "
+                                 ".npz and .csv are streamed as the run goes (memory does not grow with --duration)")
+    p.add_argument("--start-time", metavar="WHEN",
+                   help="a .tlog's start (its record time stamps): Unix seconds or ISO 8601 (default: now, whole "
+                        "seconds). Message time stamps count simulated time from 0 whatever it is; the same "
+                        "arguments with the same --start-time give the same bytes")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     _add_config_args(p)
     p.set_defaults(func=cmd_simulate)
@@ -221,9 +321,12 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except ConfigError as exc:
+    except (ConfigError, PluginError) as exc:
         print(f"rig-emulator: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C before a command installed its own handling (e.g. while compiling)
+        print("rig-emulator: interrupted", file=sys.stderr, flush=True)
+        return 130
 
 
 if __name__ == "__main__":

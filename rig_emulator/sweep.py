@@ -100,7 +100,8 @@ class SimJob:
     ``overrides`` are dotted parameter keys (``{"guidance.omega": 1.2}``), stored as a tuple
     of (key, value) pairs sorted by key; ``columns`` names the logged series to return
     (None: all, ``()``: none); ``label`` is free text for the caller (it does not affect
-    the run).
+    the run); ``controller`` names a controller plug-in (``"package.module:Name"``, imported
+    by the worker that runs the job; docs/YOUR_CONTROLLER.md).
     """
 
     scenario: str
@@ -111,6 +112,7 @@ class SimJob:
     airframe: str = "hilms"
     columns: tuple | None = None
     label: str = ""
+    controller: str = ""
 
     def __post_init__(self):
         if not isinstance(self.scenario, str) or not self.scenario:
@@ -130,6 +132,9 @@ class SimJob:
         except (TypeError, ValueError):
             raise ConfigError("SimJob overrides: must be a mapping (or pairs) of dotted key -> value") from None
         object.__setattr__(self, "overrides", pairs)
+        if not isinstance(self.controller, str) or (self.controller and ":" not in self.controller):
+            raise ConfigError(f"SimJob controller {self.controller!r}: must be a plug-in name 'package.module:Name' "
+                              "(importable where the job runs)")
         if self.columns is not None:
             cols = (self.columns,) if isinstance(self.columns, str) else tuple(self.columns)
             unknown = [c for c in cols if c not in _SERIES]
@@ -145,6 +150,8 @@ class SimJob:
         flat = dict(self.overrides)
         flat["control.strategy"] = self.strategy
         flat["sim.seed"] = self.seed
+        if self.controller:
+            flat["controller.plugin"] = self.controller
         if self.duration is not None:
             flat["sim.duration"] = self.duration
         return flat

@@ -27,7 +27,13 @@ def add_parser(sub) -> None:
                     "a verdict on each of its claims), DIR/results.json and PNG figures. The same seed gives the "
                     "same files byte for byte. See docs/REPRODUCTION.md.")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for report.md, results.json and figures")
-    p.add_argument("--seed", type=_seed, default=0, help="seed of every run: %(default)s")
+    p.add_argument("--seed", type=_seed, default=0, help="first seed of every plant's runs: %(default)s")
+    p.add_argument("--seeds", type=_workers, default=3, help="seeds per plant (SEED, SEED+1, ...): %(default)s")
+    p.add_argument("--plant", action="append", metavar="AIRFRAME",
+                   help="plant to run every experiment on (repeatable; default: hilms, the hardware rig, and "
+                        "hilms-ideal, the ideal plant; the first one's runs give the detailed sections)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", dest="sets",
+                   help="parameter override on top of every run (repeatable), e.g. smc.gain_reading=thrust")
     p.add_argument("--workers", type=_workers, help="local processes (default: one per core; 1 = in this process)")
     p.add_argument("--scheduler", metavar="ADDR", help="run the headless simulations on a Dask cluster, e.g. "
                                                        "tcp://HOST:8786 (needs pip install 'hilms-sil[cluster]')")
@@ -35,6 +41,11 @@ def add_parser(sub) -> None:
                    help=f"run only these experiments (repeatable, or comma-separated): {', '.join(NAMES)}")
     p.add_argument("--quick", action="store_true", help="shortened runs, fewer frequencies and masses: a smoke test, "
                                                         "not the reproduction")
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="compare a controller plug-in with the paper's controllers (Table 6, Eq. 44; "
+                        "docs/YOUR_CONTROLLER.md); alone it runs only that comparison, with --only also those")
+    p.add_argument("--strategy", default="smc-flc", choices=("smc-flc", "flc", "smc", "pid"),
+                   help="with --controller: the built-in loops the plug-in keeps (default %(default)s)")
     p.add_argument("--no-progress", action="store_true", help="no progress output on stderr")
     p.add_argument("--timing", metavar="FILE.json", help="also write the run's wall-clock and CPU time to FILE "
                                                         "(never into DIR: the report stays bit-identical)")
@@ -61,16 +72,40 @@ def cmd_reproduce(args) -> int:
         only = [n.strip() for group in args.only for item in group for n in item.split(",") if n.strip()]
     if args.workers is not None and args.scheduler:
         raise UsageError("give --workers (local processes) or --scheduler (a Dask cluster), not both")
+    from rig_emulator.config.loader import ConfigError, parse_override
+
+    try:
+        overrides = dict(parse_override(text) for text in args.sets)
+    except ConfigError as exc:
+        raise UsageError(f"--set: {exc}") from None
+    from gcs_tools.reproduce.plants import PLANTS
+
+    plants = tuple(args.plant) if args.plant else PLANTS
     t0, c0 = time.perf_counter(), _cpu_s()
-    outcome = reproduce(args.output, seed=args.seed, workers=args.workers, scheduler=args.scheduler, only=only,
-                        quick=args.quick, show_progress=not args.no_progress)
+    try:
+        outcome = reproduce(args.output, seed=args.seed, workers=args.workers, scheduler=args.scheduler, only=only,
+                            quick=args.quick, show_progress=not args.no_progress, plants=plants, seeds=args.seeds,
+                            overrides=overrides, controller=args.controller,
+                            strategy=args.strategy)
+    except ConfigError as exc:
+        raise UsageError(str(exc)) from None
     from rig_emulator.sweep import shutdown_pool
 
     shutdown_pool()  # the sweep's warm workers end here, so their CPU time counts among the children's
     wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
-    for s in outcome.sections:
-        for v in s.verdicts:
-            print(f"{v.status:>17}: {v.text} ({v.source})")
+    from gcs_tools.reproduce.paper_data import CLAIMS
+    from gcs_tools.reproduce.plants import count, verdicts
+
+    for col in outcome.columns:
+        k = count(col)
+        print(f"{col.label}: {k['reproduced']} of {sum(k.values())} claims reproduced, {k['partly reproduced']} "
+              f"partly (majority over {args.seeds} seed(s))")
+    for claim, (text, where) in CLAIMS.items():
+        cells = [verdicts(col).get(claim, ("not run", []))[0] for col in outcome.columns]
+        if all(c == "not run" for c in cells):
+            continue
+        print(" | ".join(f"{c:>17}" for c in cells) + f" : {text} ({where})")
+    print("columns: " + " | ".join(col.label for col in outcome.columns))
     figures = sum(len(s.figures) for s in outcome.sections)
     print(f"wrote {outcome.files[0]} , results.json and {figures} figures")
     where = f"Dask cluster {args.scheduler}" if args.scheduler else "local processes"

@@ -24,7 +24,6 @@ import numpy as np
 from gcs_tools.reproduce import figures, paper_data
 from gcs_tools.reproduce.experiment import NOT_REPRODUCED, PARTLY, REPRODUCED, Context, Section, Verdict, fmt, table
 from gcs_tools.reproduce.metrics import mean_lag, window_mean_abs
-from rig_emulator.sweep import SimJob
 
 NAME = "altitude"
 TITLE = "The 250 s altitude run: IIR vs Kalman load-cell filter"
@@ -39,9 +38,9 @@ VISIBLE_LAG_M = 0.01  # a lag below 1 cm would not show on Fig. 16/17's 8 m scal
 IIR_SHARE = 0.5  # "causes": removing the IIR removes at least half the lag
 
 
-def jobs(ctx: Context) -> list[SimJob]:
+def jobs(ctx: Context) -> list:
     duration = QUICK_S if ctx.quick else paper_data.ALTITUDE_RUN_S
-    return [SimJob("helix", s, seed=ctx.seed, duration=duration, overrides={"estimation.load_cell_filter": f},
+    return [ctx.job("helix", s, duration=duration, overrides={"estimation.load_cell_filter": f},
                    columns=("t", "pos", "pos_des", "pos_true"), label=f"{NAME}/{s}/{f}")
             for s in STRATEGIES for f in FILTERS]
 

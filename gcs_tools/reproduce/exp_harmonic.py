@@ -10,7 +10,6 @@ import numpy as np
 
 from gcs_tools.reproduce import figures, paper_data
 from gcs_tools.reproduce.experiment import Context, Section, Verdict, fmt, status_of, table
-from rig_emulator.sweep import SimJob
 
 NAME = "harmonic"
 TITLE = "Harmonic roll and pitch tracking at 0.4 rad/s"
@@ -20,8 +19,8 @@ QUICK_S = 10.0
 TRACK_FRACTION = 0.1  # "tracks": mean error below this fraction of the amplitude
 
 
-def jobs(ctx: Context) -> list[SimJob]:
-    return [SimJob("harmonic", s, seed=ctx.seed, duration=QUICK_S if ctx.quick else None,
+def jobs(ctx: Context) -> list:
+    return [ctx.job("harmonic", s, duration=QUICK_S if ctx.quick else None,
                    overrides={"guidance.omega": paper_data.HARMONIC_OMEGA,
                               "guidance.amplitude_deg": [paper_data.HARMONIC_AMPLITUDE_DEG] * 2 + [0.0]},
                    columns=("t", "euler", "euler_des", "pos", "pos_des"), label=f"{NAME}/{s}")

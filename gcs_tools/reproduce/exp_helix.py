@@ -13,7 +13,6 @@ from gcs_tools.reproduce.experiment import (NOT_REPRODUCED, PARTLY, REPRODUCED, 
                                             status_of, table)
 from gcs_tools.reproduce.metrics import hf_rms, improvement_pct
 from protocol.mean_error import COLUMNS
-from rig_emulator.sweep import SimJob
 
 NAME = "helix"
 TITLE = "Line-then-helix, FLC vs SMC-FLC"
@@ -25,8 +24,8 @@ QUICK_S = 20.0
 TOLERANCE = 0.5  # "about 9 %": within +-50 % of the stated improvement
 
 
-def jobs(ctx: Context) -> list[SimJob]:
-    return [SimJob("helix", s, seed=ctx.seed, duration=QUICK_S if ctx.quick else None,
+def jobs(ctx: Context) -> list:
+    return [ctx.job("helix", s, duration=QUICK_S if ctx.quick else None,
                    overrides={"sim.log_rate_hz": LOG_HZ},
                    columns=("t", "pos", "pos_des", "euler", "euler_des", "thrust", "v_cmd"), label=f"{NAME}/{s}")
             for s in STRATEGIES]

@@ -16,7 +16,6 @@ import numpy as np
 from gcs_tools.reproduce import figures, paper_data
 from gcs_tools.reproduce.experiment import NOT_REPRODUCED, PARTLY, REPRODUCED, Context, Section, Verdict, fmt, table
 from gcs_tools.reproduce.metrics import DIVERGENCE_DEG, divergence_time, hf_rms, window_mean_abs
-from rig_emulator.sweep import SimJob
 
 NAME = "masses"
 TITLE = "Extra masses on two arms, SMC vs FLC"
@@ -32,13 +31,13 @@ def masses(ctx: Context) -> tuple:
     return paper_data.EXTRA_MASSES_KG[-1:] if ctx.quick else paper_data.EXTRA_MASSES_KG
 
 
-def jobs(ctx: Context) -> list[SimJob]:
+def jobs(ctx: Context) -> list:
     d = paper_data.EXTRA_MASS_DISTANCE_M
     out = []
     for m in masses(ctx):
         extra = [{"arm": 1, "mass": m, "distance": d}, {"arm": 2, "mass": m, "distance": d}]
         for s in STRATEGIES:
-            out.append(SimJob("extra-mass", s, seed=ctx.seed, duration=QUICK_S if ctx.quick else None,
+            out.append(ctx.job("extra-mass", s, duration=QUICK_S if ctx.quick else None,
                               overrides={"disturbance.extra_masses": extra, "sim.log_rate_hz": LOG_HZ},
                               columns=("t", "euler", "euler_des", "euler_true", "v_cmd"),
                               label=f"{NAME}/{s}/{m * 1000:g}g"))

@@ -16,7 +16,6 @@ import numpy as np
 from gcs_tools.reproduce import figures, paper_data
 from gcs_tools.reproduce.experiment import NOT_REPRODUCED, REPRODUCED, Context, Section, Verdict, fmt, status_of, table
 from gcs_tools.reproduce.metrics import window_mean_abs
-from rig_emulator.sweep import SimJob
 
 NAME = "rectangle"
 TITLE = "Waypoint rectangle flown over MAVLink"
@@ -31,8 +30,8 @@ def duration(ctx: Context) -> float:
     return QUICK_S if ctx.quick else DURATION_S
 
 
-def jobs(ctx: Context) -> list[SimJob]:
-    return [SimJob("rectangle", STRATEGY, seed=ctx.seed, duration=duration(ctx),
+def jobs(ctx: Context) -> list:
+    return [ctx.job("rectangle", STRATEGY, duration=duration(ctx),
                    columns=("t", "pos", "pos_des", "waypoint"), label=f"{NAME}/headless")]
 
 
@@ -40,7 +39,23 @@ def live(ctx: Context):
     from gcs_tools.reproduce.live_rectangle import fly_rectangle  # pymavlink's dialect: loaded when flown
 
     w, h = paper_data.RECTANGLE_SIZE_M
-    return fly_rectangle(ctx.seed, duration(ctx), STRATEGY, w, h, paper_data.RECTANGLE_SWITCHING_RADIUS_M)
+    return fly_rectangle(ctx.seed, duration(ctx), STRATEGY, w, h, paper_data.RECTANGLE_SWITCHING_RADIUS_M,
+                         airframe=ctx.airframe, overrides=dict(ctx.overrides))
+
+
+def headless_live(ctx: Context, result):
+    """A :class:`~gcs_tools.reproduce.live_rectangle.LiveRun` made of the headless run, for the
+    plants and seeds of a reproduction that are not flown over MAVLink (``rig-gcs reproduce``
+    flies the first plant's first seed only): the same scenario, the rig's own position."""
+    from gcs_tools.reproduce.live_rectangle import LiveRun
+
+    s = result.series
+    wp = np.asarray(result.job.config()["guidance.waypoints"], dtype=float)
+    reached = [(k, float(t)) for k, t in enumerate(result.reached_t) if np.isfinite(t)]
+    return LiveRun(waypoints=wp, radius_m=paper_data.RECTANGLE_SWITCHING_RADIUS_M, duration_s=duration(ctx),
+                   t_pos=s["t"], pos=s["pos"], pos_target=s["pos_des"], t_att=s["t"], euler=np.zeros((s["t"].size, 3)),
+                   euler_target=np.zeros((s["t"].size, 3)), reached=reached, stream_hz=0.0, messages=0,
+                   rig_exit_code=0)
 
 
 def _errors(t, pos, target, t_end) -> dict:

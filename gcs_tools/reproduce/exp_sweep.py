@@ -15,7 +15,6 @@ from gcs_tools.reproduce import figures, paper_data
 from gcs_tools.reproduce.experiment import (NOT_REPRODUCED, PARTLY, REPRODUCED, Context, Section, Verdict, fmt,
                                             status_of, table, times)
 from gcs_tools.reproduce.metrics import improvement_pct
-from rig_emulator.sweep import SimJob
 
 NAME = "sweep"
 TITLE = "Frequency sweep of the harmonic reference, SMC vs FLC"
@@ -38,11 +37,11 @@ def omegas(ctx: Context) -> tuple:
     return QUICK_OMEGAS if ctx.quick else OMEGAS
 
 
-def jobs(ctx: Context) -> list[SimJob]:
+def jobs(ctx: Context) -> list:
     out = []
     for w in omegas(ctx):
         for s in STRATEGIES:
-            out.append(SimJob("harmonic", s, seed=ctx.seed, duration=QUICK_S if ctx.quick else duration_for(w),
+            out.append(ctx.job("harmonic", s, duration=QUICK_S if ctx.quick else duration_for(w),
                               overrides={"guidance.omega": w,
                                          "guidance.amplitude_deg": [paper_data.HARMONIC_AMPLITUDE_DEG] * 2 + [0.0]},
                               columns=("t", "euler", "euler_des", "pos", "pos_des"), label=f"{NAME}/{s}/{w:g}"))

@@ -29,9 +29,27 @@ STATUSES = (REPRODUCED, PARTLY, NOT_REPRODUCED, NOT_RUN)
 
 @dataclass(frozen=True)
 class Context:
+    """What every experiment's runs share: the seed, the plant (an airframe preset: ``hilms``
+    the hardware rig, ``hilms-ideal`` the ideal plant) and parameter overrides on top of it
+    (a reading of the readings table, docs/REPRODUCTION.md), as (key, value) pairs."""
+
     seed: int
     quick: bool
     out_dir: Path
+    airframe: str = "hilms"
+    overrides: tuple = ()
+
+    def job(self, scenario: str, strategy: str, duration=None, overrides=None, columns=None, label: str = ""):
+        """A :class:`~rig_emulator.sweep.SimJob` of this context's seed, plant and overrides
+        (the experiment's own ``overrides`` win over the context's)."""
+        from rig_emulator.sweep import SimJob
+
+        merged = dict(self.overrides)
+        merged.update(overrides or {})
+        return SimJob(scenario, strategy, seed=self.seed, duration=duration, overrides=merged,
+                      airframe=self.airframe, columns=columns, label=label)
+    controller: str = ""  # a controller plug-in to compare (exp_controller), 'package.module:Name'
+    strategy: str = "smc-flc"  # the loops the plug-in keeps
 
 
 @dataclass(frozen=True)

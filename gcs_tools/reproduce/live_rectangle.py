@@ -90,17 +90,33 @@ def _configure_streams(link: Link) -> None:
         link.set_message_rate(getattr(M, f"MAVLINK_MSG_ID_{name}"), STREAM_HZ)
 
 
+def _toml_value(value) -> str:
+    """A parameter value as the TOML text ``--set`` parses (numbers, strings, booleans, lists)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + "}"
+    return repr(value)
+
+
 def fly_rectangle(seed: int, duration_s: float, strategy: str = "smc-flc", width: float = 5.0, height: float = 3.0,
-                  radius: float = 0.08) -> LiveRun:
-    """Fly the Fig. 19 rectangle on a rig process over MAVLink (see the module docstring)."""
+                  radius: float = 0.08, airframe: str = "hilms", overrides: dict | None = None) -> LiveRun:
+    """Fly the Fig. 19 rectangle on a rig process over MAVLink (see the module docstring), on the
+    plant ``airframe`` with parameter ``overrides`` (dotted key -> TOML-expressible value)."""
     from rig_emulator.testing.rig import RigProcess, client_url
 
     points = rectangle_points(width, height, ALTITUDE_M)
     mission = mission_from_enu(points, radius, "local")
     # --duration: the rig stops by itself a little after the flight is recorded, even if this process dies
     args = ["--start-paused", "--no-persist", "--chunk-ms", repr(CHUNK_MS), "--duration", repr(duration_s + SPARE_S),
-            "--scenario", "rectangle",
+            "--scenario", "rectangle", "--airframe", airframe,
             "--set", f"sim.seed={int(seed)}", "--set", f"control.strategy={strategy}"]
+    for key, value in (overrides or {}).items():
+        args += ["--set", f"{key}={_toml_value(value)}"]
     try:
         rig = RigProcess(speedup="max", args=args)
     except RuntimeError as exc:

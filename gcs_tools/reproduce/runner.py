@@ -19,6 +19,7 @@ from gcs_tools.errors import OperationError, UsageError
 from gcs_tools.reproduce import report
 from gcs_tools.reproduce.experiment import Context, Section
 from gcs_tools.reproduce.experiments import EXPERIMENTS, NAMES, STABILITY
+from gcs_tools.reproduce.plants import PLANTS, SEEDS, PlantRuns
 from gcs_tools.reproduce.progress import Progress
 from gcs_tools.reproduce.stability_section import stability_section
 
@@ -26,9 +27,10 @@ from gcs_tools.reproduce.stability_section import stability_section
 @dataclass
 class Outcome:
     files: list  # paths written (report.md, results.json, figures)
-    sections: list  # Section per experiment, report order
+    sections: list  # Section per experiment, report order (the first plant's first seed)
     jobs: int  # headless runs
     sim_seconds: float  # simulated seconds of the headless runs
+    columns: list = None  # PlantRuns per plant (every seed's sections)
 
 
 def select(only) -> tuple[list, bool]:
@@ -70,24 +72,75 @@ class _Live(threading.Thread):
 
 
 def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=None, only=None, quick: bool = False,
-              show_progress: bool = True, stream=None) -> Outcome:
-    """Run the selected experiments and write ``report.md``, ``results.json`` and the figures into ``out_dir``."""
+              show_progress: bool = True, stream=None, plants=PLANTS, seeds: int = SEEDS,
+              overrides=None, live: bool = True, controller: str | None = None,
+              strategy: str = "smc-flc") -> Outcome:
+    """Run the selected experiments and write ``report.md``, ``results.json`` and the figures into ``out_dir``.
+
+    Every experiment runs on each plant of ``plants`` (airframe presets; default the hardware
+    rig ``hilms`` and the ideal plant ``hilms-ideal``) with the seeds ``seed .. seed + seeds - 1``,
+    ``overrides`` (dotted key -> value) on top of every run. The report's detailed sections,
+    figures and the MAVLink flight are the first plant's first seed; the other runs' figures go
+    to ``DIR/runs/PLANT-seedN/`` and their rectangle is the headless twin (``live=False``: the
+    first one's too, no rig process).
+
+    ``controller`` (``package.module:Name``): also run that controller plug-in next to the paper's
+    controllers (:mod:`gcs_tools.reproduce.exp_controller`), keeping the loops of ``strategy`` it
+    does not replace; without ``only`` that comparison is all that runs.
+    """
     from rig_emulator.config.loader import ConfigError
     from rig_emulator.sweep import JobFailed, run_jobs
 
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise UsageError(f"--seed {seed!r}: must be an integer >= 0")
-    exps, with_stability = select(only)
+    if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
+        raise UsageError(f"--seeds {seeds!r}: must be an integer >= 1")
+    plants = tuple(plants)
+    if not plants:
+        raise UsageError("--plant: name at least one airframe preset")
+    from rig_emulator.config.loader import available
+
+    unknown = [p for p in plants if p not in available("airframes")]
+    if unknown:
+        raise UsageError(f"--plant {', '.join(unknown)}: unknown; choose from {', '.join(available('airframes'))}")
+    from rig_emulator.config.loader import check_config
+
+    for plant in plants:  # bad overrides are refused before anything runs
+        try:
+            check_config(plant, None, overrides or None)
+        except ConfigError as exc:
+            raise UsageError(f"--set: {exc}") from None
+    if controller:
+        from gcs_tools.reproduce import exp_controller
+        from rig_emulator.controllers import PluginError, load_controller
+
+        try:
+            load_controller(controller)  # a plug-in that cannot load is a usage error, before anything runs
+        except PluginError as exc:
+            raise UsageError(f"--controller: {exc}") from None
+        exps, with_stability = select(only) if only else ([], False)
+        exps = [exp_controller] + exps
+    else:
+        exps, with_stability = select(only)
     out = prepare_out_dir(out_dir)
-    ctx = Context(seed=seed, quick=quick, out_dir=out)
+    pairs = tuple(sorted((overrides or {}).items()))
+    contexts = []
+    for plant in plants:
+        for s in range(seed, seed + seeds):
+            primary = not contexts
+            where = out if primary else out / "runs" / f"{plant}-seed{s}"
+            contexts.append(Context(seed=s, quick=quick, out_dir=where, airframe=plant, overrides=pairs,
+                                    controller=controller or "", strategy=strategy))
+    main = contexts[0]
     jobs, spans = [], {}
-    for exp in exps:
-        mine = exp.jobs(ctx)
-        spans[exp.NAME] = (len(jobs), len(jobs) + len(mine))
-        jobs += mine
-    lives = [e for e in exps if hasattr(e, "live")]
+    for i, ctx in enumerate(contexts):  # contexts are keyed by position (their overrides may hold lists)
+        for exp in exps:
+            mine = exp.jobs(ctx)
+            spans[(i, exp.NAME)] = (len(jobs), len(jobs) + len(mine))
+            jobs += mine
+    lives = [e for e in exps if hasattr(e, "live")] if live else []
     progress = Progress(len(jobs) + len(lives) + int(with_stability), stream=stream, enabled=show_progress)
-    threads = [_Live(e, ctx, progress) for e in lives]
+    threads = [_Live(e, main, progress) for e in lives]
     started = threading.Event()
 
     def start_live():
@@ -124,13 +177,31 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
             if isinstance(t.error, (OperationError, UsageError)):
                 raise t.error
             raise OperationError(f"{t.exp.NAME}: {type(t.error).__name__}: {t.error}") from t.error
-    live = {t.exp.NAME: t.result for t in threads}
-    sections: list[Section] = []
-    for exp in exps:
-        a, b = spans[exp.NAME]
-        sections.append(exp.analyse(ctx, results[a:b], live.get(exp.NAME)))
-    names = None if not only else [e.NAME for e in exps] + ([STABILITY] if with_stability else [])
-    files = report.write(out, sections, stab_md, stab, seed, quick, names)
+    flown = {t.exp.NAME: t.result for t in threads}
+    by_ctx = []
+    for i, ctx in enumerate(contexts):
+        if ctx is not main:
+            ctx.out_dir.mkdir(parents=True, exist_ok=True)
+        secs = []
+        for exp in exps:
+            a, b = spans[(i, exp.NAME)]
+            mine = results[a:b]
+            if ctx is main and exp.NAME in flown:
+                lv = flown[exp.NAME]
+            elif exp.NAME == "rectangle":
+                lv = exp.headless_live(ctx, mine[0])
+            else:
+                lv = None
+            secs.append(exp.analyse(ctx, mine, lv))
+        by_ctx.append(secs)
+    columns = [PlantRuns(plant, plant, pairs, {c.seed: by_ctx[i] for i, c in enumerate(contexts) if c.airframe == plant})
+               for plant in plants]
+    sections = by_ctx[0]
+    names = None if not (only or controller) else [e.NAME for e in exps if e.NAME != "controller"] + (
+        [STABILITY] if with_stability else [])
+    files = report.write(out, sections, stab_md, stab, seed, quick, names, columns=columns, n_seeds=seeds,
+                         controller=controller, strategy=strategy)
     files += [out / name for s in sections for name in s.figures]
-    return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results))
-
+    files += [c.out_dir / name for i, c in enumerate(contexts) if i > 0 for s in by_ctx[i] for name in s.figures]
+    return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results),
+                   columns=columns)

@@ -1,6 +1,8 @@
 """Load, merge and validate rig parameter files (TOML presets + user files + overrides).
 
-Layers, later ones winning: ``presets/rig.toml`` (every default), an airframe preset
+Layers, later ones winning: ``presets/rig.toml`` (every default), the hardware preset an
+airframe selects (``presets/hardware/<name>.toml``: the real rig's effects and readings,
+issue 13; ``hilms`` selects one, ``hilms-ideal`` none), an airframe preset
 (``presets/airframes/<name>.toml``, Table 2), a scenario preset
 (``presets/scenarios/<name>.toml``), user TOML files, then dotted-key overrides such as
 ``{"smc.switching": "boundary"}``. Every leaf is checked against
@@ -66,9 +68,32 @@ def _base_preset() -> dict:
     return _read_toml(_preset_dir() / "rig.toml", "base preset rig.toml")
 
 
+def _airframe_layers(airframe: str, seen: tuple = ()) -> tuple[dict, list[str]]:
+    """An airframe preset's ``airframe.*`` table and the hardware presets it selects.
+
+    Two keys of an airframe file are not parameters: ``based_on = "NAME"`` takes another
+    airframe preset's values first (``hilms`` is ``hilms-ideal`` plus its hardware) and
+    ``hardware = "NAME"`` layers ``presets/hardware/NAME.toml`` (any parameter tables: the
+    real rig's effects and readings, issue 13) over ``rig.toml``.
+    """
+    if airframe in seen:
+        raise ConfigError(f"airframe preset {airframe!r}: based_on forms a loop ({' -> '.join(seen + (airframe,))})")
+    own = _preset("airframes", airframe)
+    base = own.pop("based_on", None)
+    hardware = own.pop("hardware", None)
+    table, hw = ({}, []) if base is None else _airframe_layers(str(base), seen + (airframe,))
+    table.update(own)
+    if hardware is not None:
+        hw.append(str(hardware))
+    return table, hw
+
+
 def _preset_layers(airframe: str, scenario: str | None) -> dict[str, Any]:
     flat = flatten(copy.deepcopy(_base_preset()))
-    flat.update(flatten({"airframe": _preset("airframes", airframe)}))
+    table, hardware = _airframe_layers(airframe)
+    for name in hardware:
+        flat.update(flatten(_preset("hardware", name)))
+    flat.update(flatten({"airframe": table}))
     flat["airframe.name"] = airframe
     if scenario is not None:
         flat.update(flatten(_preset("scenarios", scenario)))
@@ -142,6 +167,16 @@ def check_value(key: str, spec: Spec, value: Any) -> Any:
         except ValueError as exc:
             raise ConfigError(f"{key}: {exc}") from None
         return dict(value)
+    if spec.kind == "params":
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{key}: must be a table of name = number or list of numbers ([{key}] in TOML)")
+        out = {}
+        for name, v in value.items():
+            if isinstance(v, list):
+                out[name] = [_check_number(f"{key}.{name}[{i}]", spec, x, integer=False) for i, x in enumerate(v)]
+            else:
+                out[name] = _check_number(f"{key}.{name}", spec, v, integer=False)
+        return out
     if spec.kind == "table_list":
         if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
             raise ConfigError(f"{key}: must be a list of tables ([[{key}]] in TOML)")

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 @dataclass(frozen=True)
 class Spec:
-    """One parameter: ``kind`` is float, int, str, bool, vec3, floats or table_list."""
+    """One parameter: ``kind`` is float, int, str, bool, vec3, floats, table_list, tree or params (name -> numbers)."""
 
     kind: str
     doc: str
@@ -58,6 +58,8 @@ def FS(doc, unit="", lo=-math.inf, hi=math.inf, length=None):
 
 STRATEGIES = ("smc-flc", "flc", "smc", "pid")
 GUIDANCE_TYPES = ("hover", "attitude", "helix", "waypoints")
+FENCE_ACTIONS = ("none", "warning", "hold", "return", "terminate", "land")  # PX4 GF_ACTION order
+OFFBOARD_LOSS_ACTIONS = ("land", "hold", "return", "terminate")  # PX4 COM_OBL_ACT order
 
 SCHEMA: dict[str, Spec] = {
     # --- simulation ----------------------------------------------------------------
@@ -83,12 +85,43 @@ SCHEMA: dict[str, Spec] = {
     "motors.thrust_ceiling_grf": F("thrust ceiling per motor (Sec. 3-2)", "gr.F", 0.0, 1e5, lo_open=True),
     "motors.time_constant": F("first-order lag from voltage command to thrust", "s", 0.0, 10.0),
     "motors.kf": F("rotor thrust coefficient kF, F = kF Omega^2 (Eq. 38)", "N s^2/rad^2", 0.0, 1.0, lo_open=True),
+    # hardware effects of the motor chain (issue 13, physics/hardware.py; neutral values = the ideal plant)
+    "motors.thrust_gain": FS("true thrust / Eq. 40 thrust per motor 1..4 (motor and propeller mismatch times "
+                             "the common thrust-chain gain); 1 = Eq. 40", "", 0.5, 1.5, 4),
+    "motors.thrust_bias_grf": F("common additive thrust bias of every running motor (0 = none)", "gr.F", -200.0, 200.0),
+    "motors.curve_exponent": F("exponent n of the true motor curve F = F_p (V / V_p)^n through the pivot, which the "
+                               "controllers (inverting Eq. 40) do not know; 1 = Eq. 40", "", 1.0, 3.0),
+    "motors.curve_pivot_grf": F("thrust F_p where the true curve meets Eq. 40; 0 = the hover thrust m g / 4",
+                                "gr.F", 0.0, 2000.0),
+    "motors.command_steps": I("ESC command resolution: levels over 0..voltage_max (0 = continuous)", 0, 1_000_000),
+    "motors.esc_deadband_v": F("ESC dead-band: voltage commands below this give 0 V (0 = none)", "V", 0.0, 10.0),
+    "motors.kv_rpm_per_v": F("motor velocity constant KV (Sec. 4: 750 KV); sizes the current the motors draw "
+                             "from the bench supply (physics/electrical.py)", "rpm/V", 1.0, 1e5),
     # --- control ---------------------------------------------------------------------------
     "control.strategy": S("controller strategy", STRATEGIES),
+    "controller.plugin": Spec("str", "controller plug-in 'package.module:Name' flying instead of (part of) the strategy "
+                                     "(docs/YOUR_CONTROLLER.md); empty: the built-in strategy alone"),
+    "controller.params": Spec("params", "the plug-in's own parameters (name = number or list of numbers) over its defaults"),
+    "controller.call": S("how a compiled plug-in runs: 'compiled' (inside the compiled loop) or 'python' (its kernel as "
+                         "plain Python, e.g. to debug it)", ("compiled", "python")),
     "control.max_tilt_deg": F("tilt limit of the Eq. 35 singularity guard", "deg", 1.0, 80.0),
     "control.reference_time_constant": F(
         "time constant of the filter that gives desired-attitude rates and accelerations", "s", 0.0, 1.0, lo_open=True
     ),
+    "control.actuation_delay": F("sensing-to-actuation delay: computation, PWM frame, ESC update; rounded to whole "
+                                 "physics steps (0 = none)", "s", 0.0, 0.1),
+    "controller_model.inertia_scale": V3("the inertia the controllers' model believes / the true Ixx, Iyy, Izz "
+                                         "(1 = exact)", "", 0.1, 10.0),
+    "controller_model.arm_length_scale": F("the arm length the controllers believe / the true one (1 = exact)",
+                                           "", 0.1, 10.0),
+    "controller_model.thrust_per_volt_scale": F("the Eq. 40 slope the controllers invert / the true one (1 = exact)",
+                                                "", 0.1, 10.0),
+    "smc.gain_reading": S("unit of Eq. 41's K: 'si' rad/s^2 (K as printed), 'thrust' a thrust difference in N "
+                          "(switching torque K l, yaw K kM/kF), 'torque' a torque in N m (docs/REPRODUCTION.md)",
+                          ("si", "thrust", "torque")),
+    "smc.lambda_reading": S("unit of Eq. 41's lambda: 'si' 1/s, 'deg' applied to angles in degrees against rates "
+                            "in rad/s (lambda 180/pi in SI), 'time-constant' seconds (1/lambda in SI)",
+                            ("si", "deg", "time-constant")),
     "smc.k": V3("switching gains K (Eq. 9, Eq. 41) for phi, theta, psi", "rad/s^2", 0.0, 1e4),
     "smc.lam": V3("sliding-surface slopes lambda (Eq. 5, Eq. 41) for phi, theta, psi", "1/s", 0.0, 1e4),
     "smc.switching": S("switching function: 'sgn' (paper-faithful) or 'boundary' (sat(s/Phi))", ("sgn", "boundary")),
@@ -116,6 +149,8 @@ SCHEMA: dict[str, Spec] = {
     "flc.d1_u1": F("d1 of output u1, a correction about hover thrust (Table 5)", "N", 0.0, 1e3, lo_open=True),
     "flc.d1_ux": F("d1 of virtual input uX (Table 5)", "", 0.0, 1.0, lo_open=True),
     "flc.d1_uy": F("d1 of virtual input uY (Table 5)", "", 0.0, 1.0, lo_open=True),
+    "flc.position_rate_share": F("share of the desired velocity in the position FLC's error rate: 1 derivative on "
+                                 "the error (v_des - v), 0 derivative on the measurement (-v)", "", 0.0, 1.0),
     "pid.attitude_kp": V3("attitude PID proportional gains", "1/s^2", 0.0, 1e5),
     "pid.attitude_ki": V3("attitude PID integral gains", "1/s^3", 0.0, 1e5),
     "pid.attitude_kd": V3("attitude PID derivative gains", "1/s", 0.0, 1e5),
@@ -133,9 +168,32 @@ SCHEMA: dict[str, Spec] = {
     "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
     "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
     "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
+    # flight tasks (guidance/flight_tasks.py): take-off, land, return (PX4's MIS_TAKEOFF_ALT, RTL_RETURN_ALT, MPC_LAND_SPEED)
+    "guidance.takeoff_altitude": F("take-off altitude above home when a take-off command gives none", "m", 0.0, 1e3,
+                                   lo_open=True),
+    "guidance.return_altitude": F("a return to home climbs to this altitude above home first if lower", "m", 0.0,
+                                  1e3, lo_open=True),
+    "guidance.land_speed": F("descent speed of a landing (land, return)", "m/s", 0.0, 10.0, lo_open=True),
     # --- MAVLink missions ------------------------------------------------------------------------
     "mission.item0_home": Spec("bool", "treat mission item 0 as home, stored but not flown (ArduPilot's "
                                "convention, for MAVProxy's wp load); false: every item is flown (PX4's)"),
+    "mission.max_leg_m": F("longest leg an uploaded mission may have, the first leg measured from home (PX4's "
+                           "MIS_DIST_WPS / MIS_DIST_1WP); a longer one is refused at upload", "m", 1.0, 1e7),
+    # --- geofence (protocol/mission_checks.py, link fence monitor) ------------------------------------
+    "fence.enabled": Spec("bool", "geofence on: missions reaching outside are refused at upload, a breach in flight "
+                          "triggers fence.action"),
+    "fence.action": S("on a breach, PX4's GF_ACTION codes: 'none', 'warning' (STATUSTEXT only), 'hold' (hold "
+                      "position), 'return' (return to launch), 'terminate' (motors off, disarm), 'land'",
+                      FENCE_ACTIONS),
+    "fence.radius": F("largest horizontal distance from home (ArduPilot FENCE_RADIUS)", "m", 1.0, 1e6),
+    "fence.alt_max": F("highest altitude above home (ArduPilot FENCE_ALT_MAX)", "m", -1e4, 1e5),
+    "fence.alt_min": F("lowest altitude above home (ArduPilot FENCE_ALT_MIN)", "m", -1e4, 1e5),
+    # --- offboard set-points (link offboard monitor) -------------------------------------------------
+    "offboard.loss_timeout": F("offboard set-point timeout: no set-point for this long (simulated time) in "
+                               "OFFBOARD triggers offboard.loss_action (PX4 COM_OF_LOSS_T)", "s", 0.0, 60.0,
+                               lo_open=True),
+    "offboard.loss_action": S("on an offboard set-point timeout, PX4's COM_OBL_ACT codes: 'land', 'hold', "
+                              "'return', 'terminate' (motors off, disarm)", OFFBOARD_LOSS_ACTIONS),
     # --- initial state -------------------------------------------------------------------------
     "initial.position": V3("initial virtual position (world ENU)", "m"),
     "initial.euler_deg": V3("initial phi, theta, psi", "deg", -180.0, 180.0),
@@ -197,8 +255,34 @@ SCHEMA: dict[str, Spec] = {
                             lo_open=True),
     "failsafe.on_estimate_invalid": Spec("bool", "loss of control also when the attitude estimate the controllers "
                                          "fly on is invalid (IMU majority lost or implausible) for hold_time"),
+    # pre-arm checks (simulation/prearm.py) and the ground-station loss failsafe (link/gcs_loss.py)
+    "prearm.max_tilt_deg": F("arming is refused while the roll or pitch estimate exceeds this", "deg", 0.0, 90.0,
+                             lo_open=True),
+    "prearm.max_rate_deg_s": F("arming is refused while the body-rate estimate exceeds this (the rig still turns)",
+                               "deg/s", 0.0, 1e4, lo_open=True),
+    "failsafe.gcs_timeout": F("ground station lost when no GCS HEARTBEAT arrived for this long (wall-clock)",
+                              "s", 0.0, 3600.0, lo_open=True),
+    "failsafe.gcs_action": S("on ground-station loss while armed in a mode that needs one (POSCTL, AUTO.LOITER, "
+                             "STABILIZED): 'none', 'hold', 'return', 'land' or 'disarm'",
+                             ("none", "hold", "return", "land", "disarm")),
     # --- disturbances ----------------------------------------------------------------------------
     "disturbance.wind_force": V3("constant wind force on the body (world ENU), enters Eq. 1", "N", -1e3, 1e3),
+    "disturbance.torque_noise": V3("random body torque (prop wash, cable drag): standard deviation per body axis "
+                                   "of first-order coloured noise (0 = none)", "N m", 0.0, 10.0),
+    "disturbance.torque_noise_corner_hz": F("corner frequency of the random body torque", "Hz", 0.0, 500.0,
+                                            lo_open=True),
+    # --- the spherical joint and the frame (issue 13) ----------------------------------------------
+    "joint.viscous": V3("viscous friction of the spherical joint per body axis", "N m s/rad", 0.0, 10.0),
+    "joint.coulomb": V3("Coulomb friction of the spherical joint per body axis", "N m", 0.0, 10.0),
+    "joint.coulomb_smoothing": F("body rate over which the Coulomb friction is smoothed (tanh(w / this))", "rad/s",
+                                 0.0, 10.0, lo_open=True),
+    "joint.cog_offset": V3("centre of gravity relative to the joint, body FRD (x, y: static imbalance; z > 0 below "
+                           "the joint: pendulum, z < 0 above: inverted pendulum)", "m", -0.1, 0.1),
+    "vibration.gyro_amplitude": V3("frame vibration per rotor at hover rotor speed reaching every IMU module alike: "
+                                   "gyro amplitude per body axis (scales with rotor speed^2)", "rad/s", 0.0, 10.0),
+    "vibration.accel_amplitude": V3("frame vibration per rotor at hover rotor speed: accelerometer amplitude per "
+                                    "body axis", "m/s^2", 0.0, 100.0),
+    "vibration.blades": I("propeller blades (the vibration is at the blade-pass frequency, blades x rotor speed)", 1, 8),
     "disturbance.gusts": Spec(
         "table_list",
         "1-cosine gusts added to the wind force",

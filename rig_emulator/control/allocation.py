@@ -25,7 +25,7 @@ def euler_torque_to_body(tx, ty, tz):
     return tx, -ty, -tz
 
 
-@jit(inline="always")
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
 def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, forces):
     """Motor thrusts ``forces[0:4]`` (N) realising (u1..u4) as closely as the limits allow.
 

@@ -7,10 +7,17 @@ the references come straight from guidance and u1 is the hover thrust m g.
 
 Layouts:
 
-* ``ref`` (from guidance, see guidance/runner.py): REF_* indices below.
+* ``ref`` (from guidance, see guidance/runner.py): REF_* indices below. In position mode
+  a NaN reference is "not controlled", as in PX4's trajectory set-points: a NaN position
+  (per axis) zeroes that axis' position error (velocity control), a NaN velocity its
+  velocity error, a NaN acceleration its feed-forward (:func:`_axis_errors`).
 * ``cstate`` (controller memory): CS_* indices.
 * ``cout`` (what the controller decided, for logs and telemetry): OUT_* indices.
 """
+
+import math
+
+import numpy as np
 
 from rig_emulator._jit import jit
 from rig_emulator.control.allocation import allocate, euler_torque_to_body
@@ -21,6 +28,7 @@ from rig_emulator.control.smc import smc_attitude, switch
 from rig_emulator.control.strategies import FLC, SMC
 from rig_emulator.control.thrust_direction import collective_thrust, desired_tilt
 from rig_emulator.physics.motors import rotor_speed, voltage_for_thrust
+from rig_emulator.physics.rotation import euler_rates_from_body_rates
 
 # guidance output
 REF_MODE = 0  # 0: position references, 1: attitude references
@@ -31,9 +39,14 @@ REF_YAW = 10
 REF_ATT = 11
 REF_ATT_RATE = 14
 REF_ATT_ACC = 17
-REF_SIZE = 20
+# Offboard references (set-point messages, guidance/offboard.py; every other guidance leaves
+# them at their "unused" values, so the paper's laws run exactly as before):
+REF_THRUST = 20  # collective thrust u1 (N) in attitude and rate modes; NaN: hover thrust m g
+REF_ACC_FF = 21  # 1: the FLC position law also takes REF_ACC as a feed-forward (Eq. 37 has none)
+REF_SIZE = 22
 MODE_POSITION = 0.0
 MODE_ATTITUDE = 1.0
+MODE_RATES = 2.0  # REF_ATT_RATE holds body rates (FRD, rad/s); the attitude angles are not controlled
 
 # controller memory
 CS_FILTER = 0  # 6: (value, rate) of the phi, theta, psi reference filters
@@ -41,7 +54,10 @@ CS_ATT_INT = 6  # 3: attitude PID integrators
 CS_POS_INT = 9  # 3: position PID integrators
 CS_THRUST = 12  # 4: last commanded thrusts (N), for the rotor gyroscopic estimate
 CS_STARTED = 16  # 1: 0 until the first update has initialised the filters
-CS_SIZE = 17
+# actuator test, not controller state: DO_MOTOR_TEST spins motors while disarmed (simulation/live.py motor_test)
+CS_TEST_V = 17  # 4: voltage commanded to each motor during the test
+CS_TEST_UNTIL = 21  # 1: the test ends at this time (s)
+CS_SIZE = 22
 
 # controller output
 OUT_U = 0  # 4: u1 (N), u2, u3, u4 (N m, body axes, as allocated)
@@ -54,34 +70,73 @@ OUT_UXY = 18  # 2: virtual inputs uX, uY (Eq. 34)
 OUT_SIZE = 20
 
 
+@jit(inline="always")
+def _axis_errors(ref, k, pos, vel):
+    """(position error, velocity error, acceleration feed-forward) of world axis k; NaN
+    references are not controlled (0). Finite references give exactly the paper's errors."""
+    p = ref[REF_POS + k]
+    v = ref[REF_VEL + k]
+    a = ref[REF_ACC + k]
+    e = 0.0 if math.isnan(p) else p - pos[k]
+    de = 0.0 if math.isnan(v) else v - vel[k]
+    return e, de, (0.0 if math.isnan(a) else a)
+
+
 @jit(nrt=False)
 def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, ref, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
-    """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays."""
+    """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays.
+
+    The three stages below are also the seams a controller plug-in replaces
+    (:mod:`rig_emulator.control.plugin_step`): :func:`position_stage` (position law to an
+    attitude target and u1), :func:`attitude_stage` (attitude law to Euler-frame torques) and
+    :func:`actuate` (allocation and Eq. 40 inverse).
+    """
+    u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout)
+    attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
+                   cp, cstate, e3, de3, acc3, s3, tau3)
+    u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
+    return actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd)
+
+
+@jit(nrt=False)
+def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
+    """Position law (or, in attitude mode, the guidance's attitude references and u1 = m g).
+
+    Returns (u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags): the collective thrust and the
+    shaped attitude references (value, rate, acceleration per Euler angle).
+    """
     flags = 0
     if ref[REF_MODE] == MODE_POSITION:
-        ex = ref[REF_POS] - pos[0]
-        ey = ref[REF_POS + 1] - pos[1]
-        ez = ref[REF_POS + 2] - pos[2]
-        dex = ref[REF_VEL] - vel[0]
-        dey = ref[REF_VEL + 1] - vel[1]
-        dez = ref[REF_VEL + 2] - vel[2]
+        ex, dex, ffx = _axis_errors(ref, 0, pos, vel)
+        ey, dey, ffy = _axis_errors(ref, 1, pos, vel)
+        ez, dez, ffz = _axis_errors(ref, 2, pos, vel)
         weight = cp.mass * cp.g
         if cp.pos_law == FLC:
+            if cp.flc_rate_share != 1.0:  # issue 13: derivative on the measurement, partly or wholly
+                # (dex + vel) is the desired velocity, 0 where an offboard set-point leaves it free (NaN)
+                dex = cp.flc_rate_share * (dex + vel[0]) - vel[0]
+                dey = cp.flc_rate_share * (dey + vel[1]) - vel[1]
+                dez = cp.flc_rate_share * (dez + vel[2]) - vel[2]
             # Eq. 37: uX, uY and the altitude correction of u1 from three fuzzy axes
             ux = flc_axis(ex, dex, cp.flc_x, cp.rule_table)
             uy = flc_axis(ey, dey, cp.flc_y, cp.rule_table)
             vertical = weight + flc_axis(ez, dez, cp.flc_z, cp.rule_table)
+            if ref[REF_ACC_FF] != 0.0:  # offboard acceleration set-point: m a added to the thrust vector
+                vertical += cp.mass * ffz
             u1 = collective_thrust(vertical, phi, theta, cp.max_tilt)
+            if ref[REF_ACC_FF] != 0.0 and u1 > 1e-6:
+                ux += cp.mass * ffx / u1
+                uy += cp.mass * ffy / u1
         else:
             if cp.pos_law == SMC:
-                ax = ref[REF_ACC] + cp.smcp_lam[0] * dex + cp.smcp_k[0] * switch(dex + cp.smcp_lam[0] * ex, True, cp.smcp_phi)
-                ay = ref[REF_ACC + 1] + cp.smcp_lam[1] * dey + cp.smcp_k[1] * switch(dey + cp.smcp_lam[1] * ey, True, cp.smcp_phi)
-                az = ref[REF_ACC + 2] + cp.smcp_lam[2] * dez + cp.smcp_k[2] * switch(dez + cp.smcp_lam[2] * ez, True, cp.smcp_phi)
+                ax = ffx + cp.smcp_lam[0] * dex + cp.smcp_k[0] * switch(dex + cp.smcp_lam[0] * ex, True, cp.smcp_phi)
+                ay = ffy + cp.smcp_lam[1] * dey + cp.smcp_k[1] * switch(dey + cp.smcp_lam[1] * ey, True, cp.smcp_phi)
+                az = ffz + cp.smcp_lam[2] * dez + cp.smcp_k[2] * switch(dez + cp.smcp_lam[2] * ez, True, cp.smcp_phi)
             else:
                 integ = cstate[CS_POS_INT : CS_POS_INT + 3]
-                ax = pid_axis(ex, dex, ref[REF_ACC], cp.pidp_kp[0], cp.pidp_ki[0], cp.pidp_kd[0], integ, 0, dt, cp.pid_limit)
-                ay = pid_axis(ey, dey, ref[REF_ACC + 1], cp.pidp_kp[1], cp.pidp_ki[1], cp.pidp_kd[1], integ, 1, dt, cp.pid_limit)
-                az = pid_axis(ez, dez, ref[REF_ACC + 2], cp.pidp_kp[2], cp.pidp_ki[2], cp.pidp_kd[2], integ, 2, dt, cp.pid_limit)
+                ax = pid_axis(ex, dex, ffx, cp.pidp_kp[0], cp.pidp_ki[0], cp.pidp_kd[0], integ, np.int64(0), dt, cp.pid_limit)
+                ay = pid_axis(ey, dey, ffy, cp.pidp_kp[1], cp.pidp_ki[1], cp.pidp_kd[1], integ, np.int64(1), dt, cp.pid_limit)
+                az = pid_axis(ez, dez, ffz, cp.pidp_kp[2], cp.pidp_ki[2], cp.pidp_kd[2], integ, np.int64(2), dt, cp.pid_limit)
             u1 = collective_thrust(cp.mass * (cp.g + az), phi, theta, cp.max_tilt)
             if u1 > 1e-6:
                 ux = cp.mass * ax / u1
@@ -94,28 +149,53 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
         psi_d = ref[REF_YAW]
         phi_d, theta_d, tilt_flags = desired_tilt(ux, uy, psi_d, cp.max_tilt)
         flags |= tilt_flags
-        if cstate[CS_STARTED] == 0.0:
-            cstate[CS_FILTER + 0] = phi_d
-            cstate[CS_FILTER + 2] = theta_d
-            cstate[CS_FILTER + 4] = psi_d
-        r0, dr0, a0 = reference_step(phi_d, cstate, 0, cp.ref_omega, dt, False)
-        r1, dr1, a1 = reference_step(theta_d, cstate, 1, cp.ref_omega, dt, False)
-        r2, dr2, a2 = reference_step(psi_d, cstate, 2, cp.ref_omega, dt, True)
+        r0, dr0, a0, r1, dr1, a1, r2, dr2, a2 = shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate)
     else:
-        u1 = cp.mass * cp.g
+        # attitude and rate modes: u1 is the hover thrust unless an offboard set-point gives it
+        u1 = cp.mass * cp.g if math.isnan(ref[REF_THRUST]) else ref[REF_THRUST]
         cout[OUT_UXY] = 0.0
         cout[OUT_UXY + 1] = 0.0
-        r0 = ref[REF_ATT]
-        r1 = ref[REF_ATT + 1]
-        r2 = ref[REF_ATT + 2]
-        dr0 = ref[REF_ATT_RATE]
-        dr1 = ref[REF_ATT_RATE + 1]
-        dr2 = ref[REF_ATT_RATE + 2]
+        if ref[REF_MODE] == MODE_RATES:
+            # body-rate set-point: the angle references follow the attitude (no angle error) and
+            # the rate references are the Euler-angle rates of the commanded body rates (Eq. 4)
+            r0 = phi
+            r1 = theta
+            r2 = psi
+            dr0, dr1, dr2 = euler_rates_from_body_rates(phi, theta, ref[REF_ATT_RATE], ref[REF_ATT_RATE + 1],
+                                                        ref[REF_ATT_RATE + 2])
+        else:
+            r0 = ref[REF_ATT]
+            r1 = ref[REF_ATT + 1]
+            r2 = ref[REF_ATT + 2]
+            dr0 = ref[REF_ATT_RATE]
+            dr1 = ref[REF_ATT_RATE + 1]
+            dr2 = ref[REF_ATT_RATE + 2]
         a0 = ref[REF_ATT_ACC]
         a1 = ref[REF_ATT_ACC + 1]
         a2 = ref[REF_ATT_ACC + 2]
     cstate[CS_STARTED] = 1.0
+    return u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags
 
+
+@jit(inline="always")
+def shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate):
+    """The reference filters (control/reference_filter.py) on a desired attitude; started on
+    the target at the first update after arming. Returns (r, dr, a) per Euler angle."""
+    if cstate[CS_STARTED] == 0.0:
+        cstate[CS_FILTER + 0] = phi_d
+        cstate[CS_FILTER + 2] = theta_d
+        cstate[CS_FILTER + 4] = psi_d
+    # np.int64() / np.bool_(): literal constant arguments would compile one specialisation per value (issue 14)
+    r0, dr0, a0 = reference_step(phi_d, cstate, np.int64(0), cp.ref_omega, dt, np.bool_(False))
+    r1, dr1, a1 = reference_step(theta_d, cstate, np.int64(1), cp.ref_omega, dt, np.bool_(False))
+    r2, dr2, a2 = reference_step(psi_d, cstate, np.int64(2), cp.ref_omega, dt, np.bool_(True))
+    return r0, dr0, a0, r1, dr1, a1, r2, dr2, a2
+
+
+@jit(nrt=False)
+def attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
+                   cp, cstate, e3, de3, acc3, s3, tau3):
+    """Attitude law: Euler-frame torques into ``tau3``, sliding surfaces into ``s3``."""
     e3[0] = r0 - phi
     e3[1] = r1 - theta
     e3[2] = wrap_angle(r2 - psi)
@@ -141,11 +221,15 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
             tau3[2] = flc_axis(e3[2], de3[2], cp.flc_psi, cp.rule_table)
         else:
             integ = cstate[CS_ATT_INT : CS_ATT_INT + 3]
-            tau3[0] = cp.ixx * pid_axis(e3[0], de3[0], a0, cp.pida_kp[0], cp.pida_ki[0], cp.pida_kd[0], integ, 0, dt, cp.pid_limit)
-            tau3[1] = cp.iyy * pid_axis(e3[1], de3[1], a1, cp.pida_kp[1], cp.pida_ki[1], cp.pida_kd[1], integ, 1, dt, cp.pid_limit)
-            tau3[2] = cp.izz * pid_axis(e3[2], de3[2], a2, cp.pida_kp[2], cp.pida_ki[2], cp.pida_kd[2], integ, 2, dt, cp.pid_limit)
+            tau3[0] = cp.ixx * pid_axis(e3[0], de3[0], a0, cp.pida_kp[0], cp.pida_ki[0], cp.pida_kd[0], integ, np.int64(0), dt, cp.pid_limit)
+            tau3[1] = cp.iyy * pid_axis(e3[1], de3[1], a1, cp.pida_kp[1], cp.pida_ki[1], cp.pida_kd[1], integ, np.int64(1), dt, cp.pid_limit)
+            tau3[2] = cp.izz * pid_axis(e3[2], de3[2], a2, cp.pida_kp[2], cp.pida_ki[2], cp.pida_kd[2], integ, np.int64(2), dt, cp.pid_limit)
 
-    u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
+
+@jit(nrt=False)
+def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd):
+    """Allocation (A6 inverse) of (u1 N, u2..u4 N m about the body axes) to motor thrusts and
+    voltages; records what was decided in ``cout``. Returns the flags."""
     forces = cout[OUT_THRUST_CMD : OUT_THRUST_CMD + 4]
     flags |= allocate(u1, u2, u3, u4, cp.arm_length, cp.km_over_kf, cp.f_max, forces)
     for i in range(4):

@@ -106,7 +106,7 @@ def load_cell_filter_state(n_cells: int) -> np.ndarray:
     return np.zeros((n_cells, 6))
 
 
-@jit(inline="always")
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
 def load_cell_filter_step(raw_counts, p, state, out_N):
     """One load-cell sample: guards + filter; writes thrust [N] per cell into ``out_N``.
 

@@ -2,7 +2,8 @@
 
 Types (``GuidanceParams.gtype``): HOVER (a fixed set-point), ATTITUDE (harmonic attitude of
 Eq. 44 about ``att_offset``; zero amplitude and offset for stabilisation), HELIX (Eq. 46), WAYPOINTS (Sec. 4-4 with the
-shared switching logic in ``protocol.waypoint_switching``).
+shared switching logic in ``protocol.waypoint_switching``), OFFBOARD (an external set-point,
+:mod:`rig_emulator.guidance.offboard`).
 
 Waypoint memory ``gstate`` (GS_* indices) and ``reached_t`` (time each waypoint was
 reached, NaN until then) live in arrays so a running rig can swap missions between chunks.
@@ -10,7 +11,8 @@ reached, NaN until then) live in arrays so a running rig can swap missions betwe
 Per waypoint ``i`` the guidance arguments carry: ``radii[i]`` (switching radius),
 ``holds[i]`` (hold time once reached), ``speeds[i]`` (speed of the leg that ends at ``i``;
 0 = the rig's ``speed``) and ``free_xy[i]`` (1 = the target's X and Y are where the rig is
-when the leg starts: a take-off, or a landing "here"). The target of the current leg is
+when the leg starts: a take-off, or a landing "here"; 2 = X, Y and Z: a delay or a loiter
+"here"). The target of the current leg is
 resolved once, when the leg starts, into ``gstate[GS_TARGET:GS_TARGET + 3]``.
 """
 
@@ -23,12 +25,15 @@ from rig_emulator.control.controller import (
     REF_ACC,
     REF_ATT,
     REF_ATT_ACC,
+    REF_ACC_FF,
     REF_ATT_RATE,
     REF_MODE,
     REF_POS,
+    REF_THRUST,
     REF_VEL,
     REF_YAW,
 )
+from rig_emulator.guidance.offboard import offboard_references
 from rig_emulator.guidance.trajectories import harmonic_attitude, helix_eq46
 from rig_emulator.guidance.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
 
@@ -36,6 +41,7 @@ HOVER = 0
 ATTITUDE = 1
 HELIX = 2
 WAYPOINTS = 3
+OFFBOARD = 4  # an external set-point (guidance/offboard.py); only a running rig selects it
 GUIDANCE_CODES = {"hover": HOVER, "attitude": ATTITUDE, "helix": HELIX, "waypoints": WAYPOINTS}
 
 GS_INDEX = 0  # waypoint being flown to
@@ -63,7 +69,7 @@ def _start_leg(t, pos, gp, gstate):
     else:
         gstate[GS_TARGET] = wp[i, 0]
         gstate[GS_TARGET + 1] = wp[i, 1]
-    gstate[GS_TARGET + 2] = wp[i, 2]
+    gstate[GS_TARGET + 2] = wp[i, 2] if gp.free_xy[i] != 2.0 else pos[2]  # 2: hold here (NAV_DELAY)
     speed = gp.speeds[i] if gp.speeds[i] > 0.0 else gp.speed
     gstate[GS_DURATION] = leg_duration(pos[0], pos[1], pos[2], gstate[GS_TARGET], gstate[GS_TARGET + 1],
                                        gstate[GS_TARGET + 2], speed, gp.min_leg_time)
@@ -126,7 +132,12 @@ def _waypoints(t, pos, gp, gstate, reached_t, ref):
 @jit(nrt=False)
 def guidance_update(t, pos, gp, gstate, reached_t, ref):
     """Fill ``ref`` (controller.REF_* layout) for time t and the current position."""
+    if gp.gtype == OFFBOARD:
+        offboard_references(t, gp.offboard, ref)
+        return
     ref[REF_YAW] = gp.yaw
+    ref[REF_THRUST] = math.nan  # the offboard references are unused outside OFFBOARD
+    ref[REF_ACC_FF] = 0.0
     if gp.gtype == ATTITUDE:
         ref[REF_MODE] = MODE_ATTITUDE
         harmonic_attitude(

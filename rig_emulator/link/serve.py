@@ -11,6 +11,13 @@ Parameters set over MAVLink and the mission are kept in ``./rig-state`` (``--sta
 ``--wipe``, ``--no-persist``; :mod:`rig_emulator.link.state.directory`); ``--signing-key`` turns
 MAVLink 2 signing on (:mod:`rig_emulator.link.signing.policy`).
 
+``--instance N`` (``-I N``) runs a rig beside others as ArduPilot SITL's ``-I N`` does:
+system id N + 1, default endpoints ``udpout:127.0.0.1:14550+10N`` and
+``tcpin:127.0.0.1:5760+10N``, state directory ``rig-state-N`` (``--sysid``, ``--mavlink``
+and ``--state-dir`` still override). Events (arming, mode changes, mission items, faults,
+failsafes, landings) are printed one per line, ``rig-emulator: [  t_sim] text``
+(:mod:`rig_emulator.link.commands.console`; ``--quiet`` turns them off).
+
 ``--start-paused`` holds the simulated clock at 0 until a mission is started (MISSION_START
 or AUTO.MISSION): a script uploads, arms and starts at its own pace and the flight, stamped
 in simulated time from the start, is the same run after run (``rig-gcs reproduce`` flies
@@ -25,7 +32,9 @@ import signal
 from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.link.endpoints.sockets import EndpointError
 from rig_emulator.link.loop_timing import LoopTiming
+from rig_emulator.link.px4_simulator.serve_px4 import check_px4_args, serve_px4
 from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
+from rig_emulator.link.serve_args import MAX_INSTANCE, instance_endpoints, instance_sysid, instance_state_dir
 from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args
 from rig_emulator.link.server import RigServer
 from rig_emulator.simulation.live import LiveRig
@@ -52,6 +61,12 @@ def chunk_seconds(chunk_ms: float, speedup: float) -> float:
 
 
 def cmd_serve(args, overrides: dict) -> int:
+    if not 0 <= args.instance <= MAX_INSTANCE:
+        raise ConfigError(f"--instance {args.instance}: must be 0..{MAX_INSTANCE}")
+    if args.sysid is None:
+        args.sysid = instance_sysid(args.instance)
+    if args.state_dir is None and args.instance and not args.no_persist:
+        args.state_dir = instance_state_dir(args.instance)
     if not 1 <= args.sysid <= 255:
         raise ConfigError(f"--sysid {args.sysid}: must be 1..255")
     if args.duration is not None and not args.duration > 0:
@@ -60,6 +75,7 @@ def cmd_serve(args, overrides: dict) -> int:
         raise ConfigError(f"--chunk-ms {args.chunk_ms}: must be in [0.1, 100]")
     if args.timing_log and not os.path.isdir(os.path.dirname(os.path.abspath(args.timing_log))):
         raise ConfigError(f"--timing-log {args.timing_log}: its directory does not exist")
+    check_px4_args(args)
     key, key_source = signing_key_from_args(args, _log)
     state = open_state(args, args.home)
     try:
@@ -77,9 +93,9 @@ def _serve(args, overrides: dict, state, signing) -> int:
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
     rig = prepare_rig(cfg)
     try:
-        server = RigServer(rig, args.mavlink or list(DEFAULT_ENDPOINTS), sysid=args.sysid, home=args.home,
+        server = RigServer(rig, args.mavlink or instance_endpoints(args.instance), sysid=args.sysid, home=args.home,
                            speedup=args.speedup, chunk_s=chunk_seconds(args.chunk_ms, args.speedup),
-                           signing=signing, state=state)
+                           signing=signing, state=state, console=not getattr(args, "quiet", False))
     except EndpointError as exc:
         raise ConfigError(str(exc)) from exc
     if state is not None:
@@ -91,12 +107,23 @@ def _serve(args, overrides: dict, state, signing) -> int:
     server.hold_clock = bool(getattr(args, "start_paused", False))
     if args.timing_log:
         server.timing = LoopTiming(server.chunk_s, args.speedup)
-    previous = {s: signal.signal(s, lambda *_: server.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
+    runner = server
+    if getattr(args, "px4_simulator", None):  # issue 16: the flight stack steps the plant (px4_simulator/)
+        try:
+            runner = serve_px4(args, server, rig, _log)
+        except ConfigError:
+            server.close()
+            raise
+    previous = {s: signal.signal(s, lambda *_: runner.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         for url in server.urls:
             print(f"rig-emulator: serving {url}", flush=True)
-        server.run(args.duration)
+        if runner is not server:
+            print(f"rig-emulator: px4 simulator on {runner.transport.url}", flush=True)
+        runner.run(args.duration)
     finally:
+        if runner is not server:
+            runner.close()
         server.close()
         if signing is not None:
             signing.close()

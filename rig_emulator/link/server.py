@@ -25,19 +25,25 @@ import time
 
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home
-from rig_emulator.link.commands import offboard
 from rig_emulator.link.telemetry import status as telemetry_status
 from rig_emulator.link.endpoints.channel import Channel
 from rig_emulator.link.commands.dedup import CommandDedup
+from rig_emulator.link.commands import standard_modes
 from rig_emulator.link.commands.command_long import Command, execute
+from rig_emulator.link.commands.console import Console
+from rig_emulator.link.commands.flight_control import FlightControl
+from rig_emulator.link.commands.gcs_loss import GcsLoss
 from rig_emulator.link.endpoints.counters import LinkCounters
 from rig_emulator.link.endpoints.sockets import open_endpoint
 from rig_emulator.link.telemetry.fault_report import FaultReporter
-from rig_emulator.link.ftp.nak import nak_for
+from rig_emulator.link.ftp.component_metadata import metadata_files
+from rig_emulator.link.commands.flight_monitors import FenceMonitor, OffboardLossMonitor
+from rig_emulator.link.ftp.server import FileStore, FtpServer, reply_message
 from rig_emulator.link.telemetry.ideal_sensors import load_sensor_model
 from rig_emulator.link.mission.executor import MissionExecutor
 from rig_emulator.link.mission.transfer import MissionTransfer
 from rig_emulator.link.commands.modes import FlightModes
+from rig_emulator.link.commands.offboard_setpoints import OffboardSetpoints
 from rig_emulator.link.parameters.service import ParamService
 from rig_emulator.link.signing.policy import refuse_setup_signing
 from rig_emulator.link.telemetry.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
@@ -53,7 +59,7 @@ STATUSTEXT_LEN = 50
 
 class RigServer:
     def __init__(self, rig, endpoints: list[str], sysid: int = 1, home: Home | None = None,
-                 speedup: float = 1.0, chunk_s: float = 0.005, signing=None, state=None):
+                 speedup: float = 1.0, chunk_s: float = 0.005, signing=None, state=None, console: bool = False):
         if not 1 <= sysid <= 255:
             raise ValueError(f"sysid {sysid}: must be 1..255")
         if not (speedup >= 0.0 and math.isfinite(speedup)):
@@ -71,10 +77,20 @@ class RigServer:
         if signing is not None:
             signing.bind(self)
         self.params = ParamService(rig, self, store=state.params if state is not None else None)
+        self.console = Console(enabled=console)
+        self.flight = FlightControl(self)  # PX4's modes on the rig's guidance, arming checks, flight tasks
+        self.ctx.flight = self.flight
+        self.gcs_loss = GcsLoss()
+        self.reboot_pending = False
         self.mission = MissionExecutor(self, store=state.mission if state is not None else None)
         self.ctx.mission = self.mission
         self.mission_transfer = MissionTransfer(self, self.mission)
         self.fault_reporter = FaultReporter()
+        self.offboard = OffboardSetpoints(self)
+        self.offboard_loss = OffboardLossMonitor(self, self.offboard)
+        self.fence = FenceMonitor(self)
+        self.ctx.fence = self.fence
+        self.ftp = FtpServer(FileStore(metadata_files()))
         self.endpoints = []
         try:
             for spec in endpoints:
@@ -91,20 +107,20 @@ class RigServer:
         self.command_dedup = CommandDedup()
         self.last_calibration = -math.inf  # wall-clock time of the last PREFLIGHT_CALIBRATION run
         self.heartbeat_pending = False
+        self.clock_rebase = False
         self._stop = False
         self._snap = None
         self._statustext_id = 0
         self._next_heartbeat = 0.0
         self._handlers = {
-            "HEARTBEAT": lambda msg, ch: None,
+            "HEARTBEAT": self._heartbeat_in,
             "PARAM_REQUEST_LIST": self.params.request_list,
             "PARAM_REQUEST_READ": self.params.request_read,
             "PARAM_SET": self.params.set,
             "COMMAND_LONG": lambda msg, ch: self._command(Command.from_long(msg), ch),
             "COMMAND_INT": lambda msg, ch: self._command(Command.from_int(msg), ch),
             "REQUEST_DATA_STREAM": self._request_data_stream,
-            "SET_POSITION_TARGET_LOCAL_NED": lambda msg, ch: self._setpoint(offboard.apply_position_target, msg),
-            "SET_ATTITUDE_TARGET": lambda msg, ch: self._setpoint(offboard.apply_attitude_target, msg),
+            **self.offboard.handlers(),  # SET_POSITION_TARGET_*, SET_ATTITUDE_TARGET, SET_ACTUATOR_CONTROL_TARGET
             "TIMESYNC": self._timesync,
             "FILE_TRANSFER_PROTOCOL": self._ftp,
             "SETUP_SIGNING": lambda msg, ch: refuse_setup_signing(self, msg, ch),
@@ -144,12 +160,19 @@ class RigServer:
                 for seq, chunk in enumerate(chunks)]
 
     def statustext(self, channel: Channel | None, severity: int, text: str) -> None:
-        """STATUSTEXT to one peer (or all with ``None``)."""
+        """STATUSTEXT to one peer (or all with ``None``: also a console line)."""
+        if channel is None:
+            self.console.statustext(self.rig.time_s, severity, text)
         for msg in self.statustext_messages(severity, text):
             self.broadcast(msg) if channel is None else channel.send(msg)
 
+    def event(self, text: str) -> None:
+        """An event of the flight (take-off, landing, return...): STATUSTEXT INFO to every peer and the console."""
+        self.statustext(None, M.MAV_SEVERITY_INFO, text)
+
     def broadcast_heartbeat(self) -> None:
         self.broadcast(telemetry_status.heartbeat(self.rig.snapshot(), self.ctx))
+        self.broadcast(standard_modes.current_mode(self.modes))
 
     def build(self, msg_id: int) -> list:
         """The message(s) ``msg_id`` for the current state (MAV_CMD_REQUEST_MESSAGE)."""
@@ -169,6 +192,7 @@ class RigServer:
                     self.channels[ck].send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
                 elif event == "closed":
                     self.channels.pop(ck, None)
+                    self.ftp.forget(ck)
                 elif ck in self.channels:
                     channel = self.channels[ck]
                     for msg in channel.receive(data):
@@ -211,19 +235,40 @@ class RigServer:
             target_system=0, target_component=0))
         for msg in follow:
             channel.send(msg)
+        if self.reboot_pending:
+            self.reboot()
         if self.heartbeat_pending:
             self.heartbeat_pending = False
             self.broadcast_heartbeat()
+
+    def _heartbeat_in(self, msg, channel: Channel) -> None:
+        if self.gcs_loss.heard(msg):
+            self.statustext(None, M.MAV_SEVERITY_INFO, "ground station regained")
+
+    def reboot(self) -> None:
+        """PREFLIGHT_REBOOT_SHUTDOWN: the simulation restarts from its initial state (time 0,
+        disarmed, POSCTL) with the parameters and the mission kept; the process, its endpoints
+        and every peer's stream rates stay."""
+        self.reboot_pending = False
+        t_old = self.rig.time_s
+        self.statustext(None, M.MAV_SEVERITY_NOTICE, "rebooting: the simulation restarts")
+        self.rig.reboot()
+        self.flight.reset()
+        self.mission.after_reboot()
+        self.fault_reporter = FaultReporter()
+        self._snap = None
+        self.clock_rebase = True
+        for ch in self.channels.values():
+            nd = ch.schedule.next_due
+            for msg_id in nd:
+                nd[msg_id] = max(0.0, nd[msg_id] - t_old)
+        self.heartbeat_pending = True
+        self.console.line(self.rig.time_s, "rebooted")
 
     def _request_data_stream(self, msg, channel: Channel) -> None:
         hz = float(msg.req_message_rate) if msg.start_stop else 0.0
         for msg_id in group_members(msg.req_stream_id):
             channel.schedule.set_rate(msg_id, hz, self.rig.time_s)
-
-    def _setpoint(self, apply, msg) -> None:
-        reason = apply(msg, self.rig, self.modes)
-        if reason is not None:
-            self.counters.drop(reason)
 
     def _timesync(self, msg, channel: Channel) -> None:
         if msg.tc1 == 0:
@@ -231,11 +276,13 @@ class RigServer:
             channel.send(M.MAVLink_timesync_message(tc1=now_ns, ts1=msg.ts1))
 
     def _ftp(self, msg, channel: Channel) -> None:
-        reply = nak_for(msg)
-        if reply is None:
+        """MAVFTP, read-only, serving the component metadata (:mod:`rig_emulator.link.ftp.server`)."""
+        replies = self.ftp.handle(bytes(msg.payload), (id(channel.endpoint), channel.key))
+        if replies is None:
             self.counters.drop("invalid")
-        else:
-            channel.send(reply)
+            return
+        for payload in replies:
+            channel.send(reply_message(payload, msg))
 
     # --- the loop ------------------------------------------------------------------------------------
     def step_chunk(self) -> None:
@@ -243,7 +290,11 @@ class RigServer:
         self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
+        self.offboard_loss.poll()
+        self.fence.poll()
+        self.flight.poll(self.snapshot)
         self.report_faults()
+        self.console.poll(self.rig.time_s, self.rig.armed, self.modes.name)
 
     def report_faults(self) -> None:
         """STATUSTEXT for new fault injections and detections; a HEARTBEAT at once when the
@@ -292,6 +343,10 @@ class RigServer:
             t0 = time.monotonic()
             self._heartbeat_if_due(t0)
             self.service_io()
+            self.gcs_loss.check(self)
+            if self.clock_rebase:  # a reboot restarted the simulated clock
+                self.clock_rebase = False
+                wall0, sim0 = time.monotonic(), self.rig.time_s
             self.mission_transfer.tick(t0)
             if self.signing is not None:
                 self.signing.tick(t0)

@@ -1,7 +1,7 @@
 """Fixed-step fourth-order Runge-Kutta for the rig state, and the virtual ground."""
 
 from rig_emulator._jit import jit
-from rig_emulator.physics.motors import thrust_from_voltage
+from rig_emulator.physics.hardware import motor_thrust
 from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import quat_normalize
 
@@ -60,7 +60,7 @@ def apply_ground(x, p):
             x[5] = 0.0
         f = 0.0
         for i in range(4):
-            f += p.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], p.k_v, p.f_ceiling)
+            f += motor_thrust(x[13 + i], i, p.k_v, p.f_ceiling, p.thrust_efficiency[i], p.hw)
         if f < REST_THRUST_FRACTION * p.mass * p.g:
             x[3] = 0.0
             x[4] = 0.0

@@ -12,11 +12,16 @@
 * Motor lag ``V' = (V_cmd - V) / tau_motor``.
 * Motor faults (issue 9): motor i produces ``thrust_efficiency[i]`` (1 healthy, 0 dead) of
   Eq. 40's thrust; its rotor speed and reaction moment follow the thrust it produces.
+* Hardware effects (issue 13, :mod:`rig_emulator.physics.hardware`): each motor's true
+  thrust (:func:`~rig_emulator.physics.hardware.motor_thrust`), and joint friction, the
+  centre of gravity's offset from the pivot and the random body torque added to Eq. 3's
+  torques (none of them in the ideal plant).
 """
 
 from rig_emulator._jit import jit
 from rig_emulator.physics.disturbances import extra_mass_effects, shock_torque, wind_force
-from rig_emulator.physics.motors import rotor_speed, thrust_from_voltage
+from rig_emulator.physics.hardware import cog_gravity_torque, joint_friction_torque, motor_thrust
+from rig_emulator.physics.motors import rotor_speed
 from rig_emulator.physics.rotation import quat_derivative, quat_to_rot
 
 
@@ -33,10 +38,11 @@ def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
     wz = x[12]
 
     eff = p.thrust_efficiency  # 1 = healthy; a motor fault lowers it (sensors/faults.py)
-    f1 = eff[0] * thrust_from_voltage(x[13], p.k_v, p.f_ceiling)
-    f2 = eff[1] * thrust_from_voltage(x[14], p.k_v, p.f_ceiling)
-    f3 = eff[2] * thrust_from_voltage(x[15], p.k_v, p.f_ceiling)
-    f4 = eff[3] * thrust_from_voltage(x[16], p.k_v, p.f_ceiling)
+    hw = p.hw
+    f1 = motor_thrust(x[13], 0, p.k_v, p.f_ceiling, eff[0], hw)
+    f2 = motor_thrust(x[14], 1, p.k_v, p.f_ceiling, eff[1], hw)
+    f3 = motor_thrust(x[15], 2, p.k_v, p.f_ceiling, eff[2], hw)
+    f4 = motor_thrust(x[16], 3, p.k_v, p.f_ceiling, eff[3], hw)
     u1 = f1 + f2 + f3 + f4
     u2 = p.arm_length * (f4 - f2)
     u3 = p.arm_length * (f1 - f3)
@@ -64,9 +70,19 @@ def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
     cx = wy * izz * wz - wz * iyy * wy + wy * jr
     cy = wz * ixx * wx - wx * izz * wz - wx * jr
     cz = wx * iyy * wy - wy * ixx * wx
-    dx[10] = (u2 - cx + stx + gtx) / ixx
-    dx[11] = (u3 - cy + sty + gty) / iyy
-    dx[12] = (u4 - cz + gtz) / izz
+    tx = u2 - cx + stx + gtx
+    ty = u3 - cy + sty + gty
+    tz = u4 - cz + gtz
+    if hw.friction or hw.cog_on or hw.noise_on:  # issue 13: the real rig's joint and body torques
+        fx, fy, fz = joint_friction_torque(wx, wy, wz, hw)
+        bx, by, bz = cog_gravity_torque(R, hw, p.g)
+        nt = hw.noise_torque
+        tx += fx + bx + nt[0]
+        ty += fy + by + nt[1]
+        tz += fz + bz + nt[2]
+    dx[10] = tx / ixx
+    dx[11] = ty / iyy
+    dx[12] = tz / izz
 
     quat_derivative(q0, q1, q2, q3, wx, wy, wz, dx[6:10])
 

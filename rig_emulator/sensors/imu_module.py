@@ -238,14 +238,19 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
     it unboxes); the step loop calls :func:`_sample_imu_modules`, the same without it
     (``rig_emulator/_jit.py``).
     """
-    _sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
-                        rng, raw_out)
+    _sample_imu_modules(q, omega_B, omega_dot_B, np.zeros(6), do_inertial, do_mag, k, walk, fault_mode,
+                        fault_magnitude, rng, raw_out)
 
 
 @jit(nrt=False)
-def _sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
+def _sample_imu_modules(q, omega_B, omega_dot_B, vib, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
                         rng, raw_out):
-    """:func:`sample_imu_modules` without reference counting, for the step loop."""
+    """:func:`sample_imu_modules` without reference counting, for the step loop.
+
+    ``vib`` (6,): the frame vibration every module sees alike (issue 13,
+    :func:`rig_emulator.physics.hardware.frame_vibration_step`): gyro (0:3, rad/s) added to
+    ``omega_B``, accelerometer (3:6, m/s^2) added to the specific force; zeros on the ideal plant.
+    """
     q0 = q[0]
     q1 = q[1]
     q2 = q[2]
@@ -305,11 +310,11 @@ def _sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, f
             cx = wy * pz - wz * py
             cy = wz * px - wx * pz
             cz = wx * py - wy * px
-            fx = gbx + (wy * cz - wz * cy) + (ay_ * pz - az_ * py)
-            fy = gby + (wz * cx - wx * cz) + (az_ * px - ax_ * pz)
-            fz = gbz + (wx * cy - wy * cx) + (ax_ * py - ay_ * px)
-            _emit(A, off, walk, sig[0], inv0, lo[0], hi[0], m, 0, wx, wy, wz, mode, magnitude,
-                  rng, raw_out)
+            fx = gbx + (wy * cz - wz * cy) + (ay_ * pz - az_ * py) + vib[3]
+            fy = gby + (wz * cx - wx * cz) + (az_ * px - ax_ * pz) + vib[4]
+            fz = gbz + (wx * cy - wy * cx) + (ax_ * py - ay_ * px) + vib[5]
+            _emit(A, off, walk, sig[0], inv0, lo[0], hi[0], m, 0, wx + vib[0], wy + vib[1], wz + vib[2], mode,
+                  magnitude, rng, raw_out)
             _emit(A, off, walk, sig[1], inv1, lo[1], hi[1], m, 1, fx, fy, fz, mode, magnitude,
                   rng, raw_out)
         if do_mag:

@@ -39,6 +39,7 @@ SensorState = namedtuple(
         "imu_fault_magnitude",   # (n_modules,) float64
         "cell_fault_mode",       # (n_cells,) int64
         "cell_fault_magnitude",  # (n_cells,) float64
+        "frame_vibration",       # (6,) gyro (rad/s), accel (m/s^2) every module sees alike (issue 13)
     ],
 )
 
@@ -52,6 +53,7 @@ def make_sensor_suite(imu: ImuModulesTruth, cells: LoadCellTruth) -> tuple[Senso
         imu_fault_magnitude=np.zeros(n),
         cell_fault_mode=np.zeros(c, dtype=np.int64),
         cell_fault_magnitude=np.zeros(c),
+        frame_vibration=np.zeros(6),
     )
     return SensorSuite(imu.kernel, cells.kernel), state
 
@@ -61,7 +63,7 @@ def allocate_raw(suite: SensorSuite) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros((suite.imu.n_modules, 9)), np.zeros(suite.cells.n_cells)
 
 
-@jit(inline="always")
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
 def sensors_step(step_index, q, omega_B, omega_dot_B, thrust_N, rotor_speed_rad_s, suite, state, rng,
                  imu_raw_out, cell_raw_out):
     """Sample whatever is due at ``step_index``; returns the bit mask of fresh sensors."""
@@ -71,7 +73,7 @@ def sensors_step(step_index, q, omega_B, omega_dot_B, thrust_N, rotor_speed_rad_
     mask = 0
     if do_inertial or do_mag:
         # the variant without reference counting: this runs on every step loop sample
-        _sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, imu, state.imu_walk,
+        _sample_imu_modules(q, omega_B, omega_dot_B, state.frame_vibration, do_inertial, do_mag, imu, state.imu_walk,
                             state.imu_fault_mode, state.imu_fault_magnitude, rng, imu_raw_out)
         if do_inertial:
             mask |= SAMPLED_INERTIAL

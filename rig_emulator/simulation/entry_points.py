@@ -16,6 +16,8 @@ typing (a test compares the two over every preset and strategy).
 from __future__ import annotations
 
 import numpy as np
+from numba.core.ccallback import CFunc
+from numba.core.types.function_type import WrapperAddressProtocol
 
 _SCALARS = (bool, float, np.random.Generator, type(None))
 _INT64 = (-(2**63), 2**63)
@@ -33,9 +35,21 @@ def arg_key(a):
         return t
     if t is int:
         return t if _INT64[0] <= a < _INT64[1] else None
+    sig = _function_signature(a)
+    if sig is not None:  # a controller plug-in's function pointer: its numba type is its signature
+        return ("fn", sig)
     if isinstance(a, tuple):
         items = tuple(arg_key(v) for v in a)
         return None if None in items else (t, items)
+    return None
+
+
+def _function_signature(a):
+    """The signature of a numba first-class function value (cfunc or WrapperAddressProtocol), else None."""
+    if isinstance(a, CFunc):
+        return str(a._sig)
+    if isinstance(a, WrapperAddressProtocol):
+        return str(a.signature())
     return None
 
 

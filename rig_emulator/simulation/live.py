@@ -13,20 +13,30 @@ from dataclasses import dataclass
 import numpy as np
 
 from rig_emulator.config.loader import ConfigError, RigConfig
-from rig_emulator.control.controller import OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S, OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL
-from rig_emulator.guidance.runner import ATTITUDE, GS_DONE, GS_INDEX, GS_STARTED, HOVER, WAYPOINTS, start_at
+from rig_emulator.control.controller import (CS_TEST_UNTIL, CS_TEST_V, OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S,
+                                             OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL, REF_YAW)
+from rig_emulator.guidance.offboard import (OFB_ATT, OFB_ACC, OFB_KIND, OFB_KIND_ATTITUDE, OFB_KIND_POSITION,
+                                            OFB_KIND_RATES, OFB_POS, OFB_RATE, OFB_SIZE, OFB_T0, OFB_THRUST, OFB_VEL,
+                                            OFB_YAW, OFB_YAW0, OFB_YAW_RATE)
+from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, OFFBOARD,
+                                          WAYPOINTS, start_at)
 from rig_emulator._jit import jit
+from rig_emulator.physics.hardware import motor_thrust
+from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed
+from rig_emulator.physics.electrical import supply_current
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 from rig_emulator.simulation.faults import FaultEvent, FaultStatus
+from rig_emulator.simulation import log_layout as L
 from rig_emulator.simulation.run import Simulation
 
 # keys that fix array sizes or rates of a running rig
-_RESTART_ONLY = ("sim.physics_rate_hz", "sim.control_rate_hz", "sim.log_rate_hz", "sim.seed")
+_RESTART_ONLY = ("sim.physics_rate_hz", "sim.control_rate_hz", "sim.log_rate_hz", "sim.seed", "controller.plugin",
+                 "controller.call")
 
 
-_GUIDANCE_NAMES = {0: "hover", 1: "attitude", 2: "helix", 3: "waypoints"}
+_GUIDANCE_NAMES = {0: "hover", 1: "attitude", 2: "helix", 3: "waypoints", 4: "offboard"}
 SNAPSHOT_SIZE = 68
 
 
@@ -67,7 +77,7 @@ def _fill_snapshot(x, pp, ref, cout, v_cmd, estimated, att_est, onboard, out):
         out[28 + i] = cout[OUT_ATT_RATE_DES + i]
         out[51 + i] = cout[OUT_S + i]
     for i in range(4):
-        f = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], pp.hw)
         out[31 + i] = f
         out[35 + i] = cout[OUT_THRUST_CMD + i]
         out[39 + i] = v_cmd[i]
@@ -101,7 +111,7 @@ class RigSnapshot:
     u: tuple  # u1 (N), u2, u3, u4 (N m)
     sliding_surfaces: tuple
     flags: int
-    guidance: str  # 'hover', 'attitude', 'helix', 'waypoints'
+    guidance: str  # 'hover', 'attitude', 'helix', 'waypoints', 'offboard'
     waypoint_index: int
     mission_done: bool
     true_position: tuple = (math.nan,) * 3  # the physics, for SIM_STATE and tests
@@ -110,6 +120,14 @@ class RigSnapshot:
     true_body_rates: tuple = (math.nan,) * 3
     sensors: "SensorSnapshot | None" = None  # None when the sensor models are off
     faults: "FaultStatus | None" = None  # injected faults, the supervisor's detections and failsafe
+    #: simulated time in whole microseconds from the step counter; message time stamps use it
+    #: (None: derive it from ``time_s``, rounded to the microsecond)
+    time_us: int | None = None
+
+    @property
+    def stamp_us(self) -> int:
+        """Simulated time in whole microseconds for message time stamps."""
+        return self.time_us if self.time_us is not None else int(round(self.time_s * 1e6))
 
     @property
     def rotation(self) -> np.ndarray:
@@ -142,6 +160,16 @@ class SensorSnapshot:
 
 
 @dataclass(frozen=True)
+class PowerStatus:
+    """The bench supply (:meth:`LiveRig.power`)."""
+
+    voltage_v: float
+    current_a: float
+    charge_c: float  # delivered since start
+    energy_j: float
+
+
+@dataclass(frozen=True)
 class MissionStatus:
     """The mission guidance at one instant (:meth:`LiveRig.mission_status`)."""
 
@@ -159,14 +187,20 @@ class LiveRig:
     exactly as it was.
     """
 
-    def __init__(self, cfg: RigConfig, chunk_steps_max: int = 10_000):
-        self.sim = Simulation(cfg, log_capacity=chunk_steps_max + 1)
+    def __init__(self, cfg: RigConfig, chunk_steps_max: int = 10_000, controller=None, external_motors: bool = False):
+        """``controller``, ``external_motors``: see :class:`~rig_emulator.simulation.run.Simulation`."""
+        self.sim = Simulation(cfg, log_capacity=chunk_steps_max + 1, controller=controller,
+                              external_motors=external_motors)
         self.chunk_steps_max = chunk_steps_max
         self.sim.armed = False
         self._snap_values = np.zeros(SNAPSHOT_SIZE)
         self._calibrations = 0
         self._mission = None  # (waypoints, radii, holds, speeds, free_xy) stored
-        self._flying = None  # the same for the mission the guidance was last started on
+        self._charge_c = 0.0  # charge the bench supply delivered since start (C), see power()
+        self._energy_j = 0.0
+        self._flying = None  # the same for the mission (or task path) the guidance was last started on
+        self._path_kind = None  # what the waypoint guidance flies: "mission", "task" (fly_path) or None
+        self._speed_override = None  # m/s set by change_speed (DO_CHANGE_SPEED) until a reboot
 
     # --- stepping ----------------------------------------------------------------------
     @property
@@ -187,7 +221,13 @@ class LiveRig:
             raise ValueError(f"step({n_steps}): at most {self.chunk_steps_max} steps per call")
         self.sim.log_row = 0
         self.sim.advance(n_steps)
-        return self.sim.log[: self.sim.log_row]
+        rows = self.sim.log[: self.sim.log_row]
+        if rows.shape[0]:  # the supply's charge and energy, integrated over the recorded rows
+            amps = self._supply_current(rows[:, L.THRUST:L.THRUST + 4], rows[:, L.V_CMD:L.V_CMD + 4])
+            dt_log = self.sim.log_div * self.sim.dt
+            self._charge_c += float(np.sum(amps)) * dt_log
+            self._energy_j += float(np.sum(amps)) * dt_log * self.supply_voltage
+        return rows
 
     def warm_up(self) -> float:
         return self.sim.warm_up()
@@ -199,7 +239,7 @@ class LiveRig:
         v = self._snap_values
         sp, ss = sim.sensing.params, sim.sensing.state
         _fill_snapshot(sim.x, sim.pp, sim.ref, sim.cout, sim.v_cmd, sp.estimated, ss.att_est, ss.onboard, v)
-        attitude_mode = sim.ref[REF_MODE] == 1.0
+        attitude_mode = sim.ref[REF_MODE] != 0.0  # attitude or rate mode: no position loop
         t = v.tolist()
         sensors = None
         if sp.simulate:
@@ -220,6 +260,7 @@ class LiveRig:
         nan3 = (math.nan,) * 3
         return RigSnapshot(
             time_s=float(sim.time),
+            time_us=sim.time_us,
             armed=sim.armed,
             position=tuple(t[0:3]),
             velocity=tuple(t[3:6]),
@@ -249,13 +290,30 @@ class LiveRig:
             faults=sim.fault_status(),
         )
 
+    @property
+    def supply_voltage(self) -> float:
+        """The bench supply's voltage (V): the motors' supply ceiling of Fig. 11 (a regulated lab supply)."""
+        return float(self.cfg["motors.voltage_max"])
+
+    def _supply_current(self, thrusts, voltages) -> np.ndarray:
+        return supply_current(thrusts, voltages, self.supply_voltage, self.cfg["airframe.km_over_kf"],
+                              self.cfg["motors.kv_rpm_per_v"])
+
+    def power(self, snap: RigSnapshot | None = None) -> PowerStatus:
+        """The bench supply now (:mod:`rig_emulator.physics.electrical`): voltage, the current the
+        motor drivers draw at ``snap`` (default: now) and what was delivered since start."""
+        snap = snap or self.snapshot()
+        amps = float(self._supply_current(snap.thrusts, snap.voltage_commands)) if snap.armed else 0.0
+        return PowerStatus(voltage_v=self.supply_voltage, current_a=amps, charge_c=self._charge_c,
+                           energy_j=self._energy_j)
+
     def fault_status(self) -> FaultStatus:
         """Injected faults, the supervisor's detections and the failsafe, now (cheap: no snapshot)."""
         return self.sim.fault_status()
 
     def fault_signature(self) -> tuple:
-        """Changes whenever :meth:`fault_status` may have changed (cheap: for pollers)."""
-        return len(self.sim.faults.events), self.sim.us.flags.tobytes()
+        """Changes whenever :meth:`fault_status` or :attr:`plugin_failure` may have changed (cheap: for pollers)."""
+        return len(self.sim.faults.events), self.sim.us.flags.tobytes(), id(self.sim.plugin_failure)
 
     def fault_events(self, since: int = 0) -> list[FaultEvent]:
         """Every fault injection (config or command) from number ``since`` on, oldest first."""
@@ -268,12 +326,44 @@ class LiveRig:
     def mission_status(self) -> MissionStatus:
         """Where the mission guidance is (cheap: no snapshot)."""
         gs = self.sim.gstate
-        return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0,
+        return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0
+                             and self._path_kind == "mission",
                              index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
+
+    @property
+    def controller(self):
+        """The controller plug-in flying (a :class:`rig_emulator.controllers.Controller`), or None."""
+        return self.sim.plugin.controller
+
+    @property
+    def plugin_failure(self):
+        """Why the plug-in stopped (a :class:`~rig_emulator.controllers.PluginError` naming it, the
+        time and the problem; the rig then disarmed), None while it flies. Arming clears it."""
+        return self.sim.plugin_failure
+
+    def path_status(self) -> MissionStatus:
+        """Where a path started with :meth:`fly_path` is (``flying`` False once anything else steers)."""
+        gs = self.sim.gstate
+        return MissionStatus(flying=self.sim.gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0
+                             and self._path_kind == "task",
+                             index=int(gs[GS_INDEX]), done=bool(gs[GS_DONE]), reached_t=self.sim.reached_t.copy())
+
+    @property
+    def armed(self) -> bool:
+        """Armed now (cheap: no snapshot)."""
+        return self.sim.armed
 
     # --- commanding ------------------------------------------------------------------------
     def arm(self, armed: bool = True) -> None:
         self.sim.armed = bool(armed)
+
+    def set_motor_voltages(self, volts) -> None:
+        """Motor voltages 1-4 (V) from the next step on; a rig built with ``external_motors=True``."""
+        self.sim.set_motor_voltages(volts)
+
+    def set_motor_thrusts(self, thrusts) -> None:
+        """Motor thrusts 1-4 (N, through Eq. 40) from the next step on; ``external_motors=True``."""
+        self.sim.set_motor_thrusts(thrusts)
 
     def set_param(self, key: str, value) -> RigConfig:
         """Change one parameter of the running rig (validated; rejected changes change nothing)."""
@@ -284,14 +374,25 @@ class LiveRig:
             if key in _RESTART_ONLY and changes[key] != self.cfg.get(key):
                 raise ConfigError(f"{key}: cannot change while the rig runs; restart it with the new value")
         new_cfg = self.cfg.with_overrides(changes)
-        pp = physics_params(new_cfg, self.sim.pp.thrust_efficiency)  # injected motor faults persist
+        # injected motor faults and the hardware effects' state (command buffer, noise) persist
+        pp = physics_params(new_cfg, self.sim.pp.thrust_efficiency, self.sim.pp.hw)
         cp = control_params(new_cfg)
         up = self.sim.supervisor_params(new_cfg)
         gp = self._guidance_from(new_cfg, self.sim.gp)
         dist_keys = [k for k in changes if k.startswith("disturbance.")]
         dist = disturbances(new_cfg) if dist_keys else self.sim.dist
+        plugin = self.sim.plugin
+        if plugin.controller is not None and "controller.params" in changes:
+            from rig_emulator.controllers import ControllerParams
+
+            check = ControllerParams(type(plugin.controller).params, new_cfg["controller.params"], owner=plugin.name)
+        else:
+            check = None  # (a PluginError above changed nothing)
         self.sim.cfg, self.sim.pp, self.sim.cp, self.sim.gp, self.sim.dist = new_cfg, pp, cp, gp, dist
         self.sim.up = up
+        plugin.refresh_rig(cp)
+        if check is not None:
+            plugin.controller.params.array[:] = check.array
         return new_cfg
 
     def _guidance_from(self, cfg: RigConfig, current):
@@ -302,23 +403,125 @@ class LiveRig:
             gp = guidance_params(cfg)
         # keep the live guidance choice (guided target, attitude target, mission) over the config's
         return gp._replace(gtype=current.gtype, hover_position=current.hover_position, att_offset=current.att_offset,
-                           amplitude=current.amplitude, yaw=current.yaw)
+                           amplitude=current.amplitude, yaw=current.yaw, speed=self._cruise_speed(cfg),
+                           offboard=current.offboard)
+
+    def _cruise_speed(self, cfg: RigConfig) -> float:
+        return cfg["guidance.speed"] if self._speed_override is None else self._speed_override
 
     def set_position_target(self, position, yaw: float | None = None) -> None:
         """Guided mode: hold the given world-ENU position (and yaw, rad) from the next step."""
         gp = self.sim.gp
         self.sim.gp = gp._replace(
             gtype=HOVER,
-            hover_position=np.ascontiguousarray(position, dtype=np.float64),
+            hover_position=np.array(position, dtype=np.float64).reshape(3),
             yaw=gp.yaw if yaw is None else float(yaw),
         )
 
-    def set_attitude_target(self, phi: float, theta: float, psi: float) -> None:
-        """Attitude mode: hold the given paper Euler angles (rad); the position loop is off."""
+    def set_attitude_target(self, phi: float, theta: float, psi: float, thrust_fraction: float | None = None,
+                            body_rates=None) -> None:
+        """Attitude mode: hold the given paper Euler angles (rad); the position loop is off.
+
+        With ``thrust_fraction`` (a fraction of :meth:`max_collective_thrust`) the collective
+        thrust is the caller's instead of the hover thrust m g; ``body_rates`` (omega_B, FRD,
+        rad/s) is a rate feed-forward, as Euler-angle rates at the target attitude. Either
+        makes it an offboard set-point (guidance/offboard.py)."""
+        if not all(math.isfinite(v) for v in (phi, theta, psi)):
+            raise ValueError("attitude angles must be finite")
         gp = self.sim.gp
-        self.sim.gp = gp._replace(
-            gtype=ATTITUDE, att_offset=np.array([phi, theta, 0.0]), amplitude=np.zeros(3), yaw=float(psi)
-        )
+        euler_rates = None
+        if body_rates is not None:
+            w = np.asarray(body_rates, dtype=np.float64).reshape(3)
+            if not np.all(np.isfinite(w)):
+                raise ValueError("attitude rates must be finite")
+            euler_rates = euler_rates_from_body_rates(phi, theta, w[0], w[1], w[2])
+        if thrust_fraction is None and euler_rates is None:
+            self.sim.gp = gp._replace(
+                gtype=ATTITUDE, att_offset=np.array([phi, theta, 0.0]), amplitude=np.zeros(3), yaw=float(psi)
+            )
+            return
+        ofb = self._offboard_array(OFB_KIND_ATTITUDE)
+        ofb[OFB_ATT:OFB_ATT + 3] = (phi, theta, psi)
+        rates = np.zeros(3) if euler_rates is None else np.asarray(euler_rates, dtype=np.float64).reshape(3)
+        if not np.all(np.isfinite(rates)):
+            raise ValueError("attitude rates must be finite")
+        ofb[OFB_RATE:OFB_RATE + 3] = rates
+        if thrust_fraction is not None:
+            ofb[OFB_THRUST] = self.collective_thrust_from_fraction(thrust_fraction)
+        self.sim.gp = gp._replace(gtype=OFFBOARD, offboard=ofb)
+
+    # --- offboard set-points (guidance/offboard.py) -------------------------------------------
+    def max_collective_thrust(self) -> float:
+        """The largest collective thrust u1 the four motors give (N): 4 x the per-motor limit
+        (thrust ceiling of Sec. 3-2 or Eq. 40 at the supply's full voltage, Fig. 11)."""
+        return 4.0 * self.sim.cp.f_max
+
+    def collective_thrust_from_fraction(self, fraction: float) -> float:
+        """u1 (N) of a normalised collective thrust in [0, 1] (MAVLink's SET_ATTITUDE_TARGET.thrust
+        reading: a fraction of the maximum); ValueError outside (the rig has no reverse thrust)."""
+        if not (math.isfinite(fraction) and 0.0 <= fraction <= 1.0):
+            raise ValueError(f"thrust {fraction:g} must be in [0, 1] (no reverse thrust)")
+        return float(fraction) * self.max_collective_thrust()
+
+    def hover_thrust_fraction(self) -> float:
+        """The normalised collective thrust that carries the rig's weight, m g / u1_max."""
+        return self.sim.cp.mass * self.sim.cp.g / self.max_collective_thrust()
+
+    def _offboard_array(self, kind: float) -> np.ndarray:
+        ofb = np.full(OFB_SIZE, np.nan)
+        ofb[OFB_KIND] = kind
+        ofb[OFB_T0] = self.sim.time
+        return ofb
+
+    def _current_heading(self) -> float:
+        """psi to turn from or hold: the live offboard reference when one is flown, else the attitude."""
+        if self.sim.gp.gtype == OFFBOARD and self.sim.gp.offboard[OFB_KIND] == OFB_KIND_POSITION:
+            return float(self.sim.ref[REF_YAW])
+        return float(self.snapshot().euler[2])
+
+    def set_offboard_setpoint(self, position=None, velocity=None, acceleration=None,
+                              yaw: float | None = None, yaw_rate: float | None = None) -> None:
+        """Offboard position/velocity/acceleration set-point (world ENU, SI; NaN entries and
+        ``None`` vectors are not controlled), heading ``yaw`` or turn rate ``yaw_rate`` (paper
+        psi, rad and rad/s). Takes effect at the next step; replaces any other guidance."""
+        ofb = self._offboard_array(OFB_KIND_POSITION)
+        for start, vec in ((OFB_POS, position), (OFB_VEL, velocity), (OFB_ACC, acceleration)):
+            if vec is not None:
+                v = np.asarray(vec, dtype=np.float64).reshape(3)
+                if np.any(np.isinf(v)):
+                    raise ValueError("set-point values must be finite (NaN: not controlled)")
+                ofb[start:start + 3] = v
+        if np.all(np.isnan(ofb[OFB_POS:OFB_ACC + 3])):
+            raise ValueError("a set-point needs a position, a velocity or an acceleration")
+        for name, v in (("yaw", yaw), ("yaw rate", yaw_rate)):
+            if v is not None and not math.isfinite(v):
+                raise ValueError(f"{name} {v} is not a finite number")
+        ofb[OFB_YAW] = np.nan if yaw is None else float(yaw)
+        ofb[OFB_YAW_RATE] = np.nan if yaw_rate is None else float(yaw_rate)
+        ofb[OFB_YAW0] = self._current_heading()
+        self.sim.gp = self.sim.gp._replace(gtype=OFFBOARD, offboard=ofb)
+
+    def set_body_rate_target(self, rates_frd, thrust_fraction: float | None = None) -> None:
+        """Rate mode: track body rates (omega_B, FRD, rad/s) with a collective thrust (a fraction
+        of :meth:`max_collective_thrust`; ``None``: hover thrust m g). The position loop is off."""
+        r = np.asarray(rates_frd, dtype=np.float64).reshape(3)
+        if not np.all(np.isfinite(r)):
+            raise ValueError("body rates must be finite")
+        ofb = self._offboard_array(OFB_KIND_RATES)
+        ofb[OFB_RATE:OFB_RATE + 3] = r
+        if thrust_fraction is not None:
+            ofb[OFB_THRUST] = self.collective_thrust_from_fraction(thrust_fraction)
+        self.sim.gp = self.sim.gp._replace(gtype=OFFBOARD, offboard=ofb)
+
+    def set_collective_thrust(self, thrust_fraction: float) -> None:
+        """Change only the collective thrust of the attitude or rate set-point being flown
+        (a fraction of :meth:`max_collective_thrust`); ValueError when none is flown."""
+        gp = self.sim.gp
+        if gp.gtype != OFFBOARD or gp.offboard[OFB_KIND] == OFB_KIND_POSITION:
+            raise ValueError("a thrust alone needs an attitude or body-rate set-point to go with")
+        ofb = gp.offboard.copy()
+        ofb[OFB_THRUST] = self.collective_thrust_from_fraction(thrust_fraction)
+        self.sim.gp = gp._replace(offboard=ofb)
 
     def set_mission(self, waypoints, radii=None, holds=None, speeds=None, free_xy=None) -> None:
         """Store a waypoint mission (world ENU, m); :meth:`start_mission` flies it.
@@ -345,8 +548,9 @@ class LiveRig:
         if not 0 <= index < wp.shape[0]:
             raise ValueError(f"mission index {index} out of range 0..{wp.shape[0] - 1}")
         gp = guidance_params(self.cfg, *self._mission)
-        self.sim.gp = gp._replace(gtype=WAYPOINTS, yaw=self.sim.gp.yaw)
+        self.sim.gp = gp._replace(gtype=WAYPOINTS, yaw=self.sim.gp.yaw, speed=self._cruise_speed(self.cfg))
         self._flying = self._mission
+        self._path_kind = "mission"
         if not (keep_reached and self.sim.reached_t.shape[0] == wp.shape[0]):
             self.sim.reached_t = np.full(wp.shape[0], np.nan)
         start_at(index, self.sim.time, self.sim.x[0:3].copy(), self.sim.gp, self.sim.gstate)
@@ -354,6 +558,68 @@ class LiveRig:
     def hold_position(self) -> None:
         """Pause: hold the current position (e.g. a mission pause)."""
         self.set_position_target(self.sim.x[0:3].copy())
+
+    def position_now(self) -> np.ndarray:
+        """The position the controllers fly on now (the onboard estimate with the sensor
+        models on, else the physics), world ENU (m)."""
+        sp, ss = self.sim.sensing.params, self.sim.sensing.state
+        return (ss.onboard[0:3] if sp.estimated else self.sim.x[0:3]).copy()
+
+    def fly_path(self, waypoints, speeds=None, free_xy=None, holds=None) -> None:
+        """Fly a guidance path (take-off, landing, return, fly-to) on Sec. 4-4 virtual lines
+        from where the rig is now, without touching the stored mission; ``speeds`` per leg
+        (0 = the cruise speed), ``free_xy`` 1 = the leg keeps the X/Y the rig has when it
+        starts. Progress: :meth:`path_status`."""
+        wp = np.ascontiguousarray(waypoints, dtype=np.float64).reshape(-1, 3)
+        if wp.shape[0] == 0 or not np.all(np.isfinite(wp)):
+            raise ValueError("a path needs at least one finite waypoint")
+        path = (wp, None, holds, speeds, free_xy)
+        gp = guidance_params(self.cfg, *path)
+        self.sim.gp = gp._replace(gtype=WAYPOINTS, yaw=self.sim.gp.yaw, speed=self._cruise_speed(self.cfg))
+        self._flying = path
+        self._path_kind = "task"
+        self.sim.reached_t = np.full(wp.shape[0], np.nan)
+        start_at(0, self.sim.time, self.position_now(), self.sim.gp, self.sim.gstate)
+
+    def change_speed(self, speed: float | None) -> None:
+        """Cruise speed (m/s) of the waypoint legs from now on (the leg being flown restarts
+        from here at that speed); ``None`` = back to ``guidance.speed``."""
+        if speed is not None and not (0.0 < speed <= 100.0):
+            raise ValueError(f"speed {speed:g} m/s must be in (0, 100]")
+        self._speed_override = None if speed is None else float(speed)
+        gp = self.sim.gp
+        self.sim.gp = gp._replace(speed=self._cruise_speed(self.cfg))
+        gs = self.sim.gstate
+        if gp.gtype == WAYPOINTS and gs[GS_STARTED] != 0.0 and gs[GS_DONE] == 0.0 and gs[GS_HOLD_UNTIL] < 0.0:
+            start_at(int(gs[GS_INDEX]), self.sim.time, self.position_now(), self.sim.gp, gs)
+
+    def motor_test(self, motor: int, fraction: float, duration: float) -> float:
+        """Bench motor test (DO_MOTOR_TEST): disarmed, command motor 1..4 to ``fraction`` of the
+        full voltage for ``duration`` s from now (the others stay at 0 V); returns the voltage."""
+        if self.sim.armed:
+            raise ValueError("motor test needs the rig disarmed")
+        if motor not in (1, 2, 3, 4) or not 0.0 <= fraction <= 1.0 or not 0.0 < duration <= 60.0:
+            raise ValueError("motor 1..4, throttle in [0, 1], duration in (0, 60] s")
+        volts = fraction * self.sim.pp.v_max
+        cs = self.sim.cstate
+        cs[CS_TEST_V : CS_TEST_V + 4] = 0.0
+        cs[CS_TEST_V + motor - 1] = volts
+        cs[CS_TEST_UNTIL] = self.sim.time + duration
+        return volts
+
+    def reboot(self) -> None:
+        """Restart the simulation from the configuration's initial state (time 0, disarmed,
+        faults and disturbances injected by command cleared), keeping the current parameters
+        and the stored mission: what MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN does to a flight
+        controller, without restarting the process."""
+        cfg = self.sim.cfg
+        self.sim = Simulation(cfg, log_capacity=self.chunk_steps_max + 1)
+        self.sim.armed = False
+        self.sim.warm_up()
+        self._flying = None
+        self._path_kind = None
+        self._speed_override = None
+        self.set_position_target(list(cfg["initial.position"]))
 
     def apply_shock(self, arm: int, torque: float, duration: float) -> None:
         """Fig. 12: a torque pulse on arm 1..4 starting now (positive pushes the tip down)."""

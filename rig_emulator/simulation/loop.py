@@ -11,6 +11,10 @@ arrays: a headless run calls it once, the MAVLink rig calls it in chunks. After 
 health and loss of control; when its failsafe disarms, the rest of the call runs disarmed
 (the caller reads the latch and keeps the rig disarmed).
 
+A controller plug-in (``pl``, ``pfn``; :mod:`rig_emulator.control.plugin_step`) replaces the
+built-in control update when ``pl.mode`` is not ``P_NONE``; with ``P_EXTERNAL`` no
+controller runs and the motor voltages ``v_cmd`` are whatever the caller set (lockstep).
+
 Reading: the accelerometers' lever-arm term uses the angular acceleration of the
 previous step's first RK4 stage.
 """
@@ -19,6 +23,8 @@ from rig_emulator._jit import jit
 from rig_emulator.control.supervisor import F_FAILSAFE, F_INVALID, supervise
 from rig_emulator.control.controller import (
     CS_STARTED,
+    CS_TEST_UNTIL,
+    CS_TEST_V,
     OUT_ATT_DES,
     OUT_ATT_RATE_DES,
     OUT_FLAGS,
@@ -30,26 +36,31 @@ from rig_emulator.control.controller import (
     REF_VEL,
     control_update,
 )
+from rig_emulator.control.plugin_layout import P_EXTERNAL, P_NONE
+from rig_emulator.control.plugin_step import plugin_control
 from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
 from rig_emulator.estimation.load_cell_filter import load_cell_filter_step
 from rig_emulator.estimation.onboard_position import onboard_translation_step
 from rig_emulator.guidance.runner import GS_INDEX, guidance_update
 from rig_emulator.physics.disturbances import wind_force
 from rig_emulator.physics.integrator import rk4_step
-from rig_emulator.physics.motors import rotor_speed, thrust_from_voltage
+from rig_emulator.physics.hardware import actuator_chain, frame_vibration_step, motor_thrust, torque_noise_step
+from rig_emulator.physics.motors import rotor_speed
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates
 from rig_emulator.sensors.sensor_step import SAMPLED_CELLS, sensors_step
 from rig_emulator.simulation import log_layout as L
 
 
-@jit(inline="always")
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
 def _sense(k, x, pp, sp, ss, rng, omega_dot):
     """Sample the sensors due at step k and run the estimators on them."""
     if k % sp.suite.cells.decim == 0:  # the load cells need the motors' thrusts and speeds
         for i in range(4):
-            f = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+            f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], pp.hw)
             ss.thrust_true[i] = f
             ss.rotor_speed[i] = rotor_speed(f, pp.kf)
+    if pp.hw.vib_on and k % sp.suite.imu.decim_inertial == 0:  # issue 13: frame vibration, all modules alike
+        frame_vibration_step(sp.suite.imu.dt_s * sp.suite.imu.decim_inertial, x, pp, ss.sstate.frame_vibration)
     mask = sensors_step(k, x[6:10], x[10:13], omega_dot, ss.thrust_true, ss.rotor_speed,
                         sp.suite, ss.sstate, rng, ss.imu_raw, ss.cell_raw)
     if mask == 0:
@@ -64,7 +75,7 @@ def run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng, up, us,
+    sp, ss, rng, up, us, pl, pfn,
 ):
     """Advance the rig; returns the next free log row.
 
@@ -79,7 +90,7 @@ def run_steps(
         k_start, n_steps, dt, ctrl_div, log_div,
         x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
         cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-        sp, ss, rng, up, us,
+        sp, ss, rng, up, us, pl, pfn,
     )
 
 
@@ -88,7 +99,7 @@ def _run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng, up, us,
+    sp, ss, rng, up, us, pl, pfn,
 ):
     """The step loop of :func:`run_steps` (no reference counting: no allocation here)."""
     ctrl_dt = dt * ctrl_div
@@ -101,8 +112,8 @@ def _run_steps(
                             or k % sp.suite.cells.decim == 0):
             _sense(k, x, pp, sp, ss, rng, work[0, 10:13])
         if not armed:
-            for i in range(4):
-                v_cmd[i] = 0.0
+            for i in range(4):  # 0 V, or a motor test's voltage (DO_MOTOR_TEST, LiveRig.motor_test)
+                v_cmd[i] = cstate[CS_TEST_V + i] if t < cstate[CS_TEST_UNTIL] else 0.0
             cstate[CS_STARTED] = 0.0
         if k % ctrl_div == 0:
             if sp.simulate:
@@ -130,17 +141,25 @@ def _run_steps(
                 wz = x[12]
             if armed:
                 guidance_update(t, pos, gp, gstate, reached_t, ref)
-                control_update(
-                    ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
-                    ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
-                )
+                if pl.mode == P_NONE:  # the built-in strategy
+                    control_update(
+                        ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
+                        ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
+                    )
+                elif pl.mode != P_EXTERNAL:  # a controller plug-in (issue 16); P_EXTERNAL: v_cmd set from outside
+                    if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
+                                          ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
+                        armed = False  # the plug-in failed: motors off from the next step (pl.status says why)
             if k % up.div == 0 and supervise(t, armed, sp.simulate, sp.estimated, phi, theta, wx, wy, wz, cout,
                                              ss.awork.ensemble.rejected, ss.awork.combined, ss.health[1], up, us):
                 armed = False  # the failsafe cuts the motors from the next step on
         if k % log_div == 0 and log_row < log.shape[0]:
             _log_row(log[log_row], t, x, pp, sp, ss, ref, cout, gstate, v_cmd, us)
             log_row += 1
-        rk4_step(t, dt, x, v_cmd, pp, wind, gusts, shocks, extra, work, R)
+        # issue 13: the command reaches the motors through the ESC chain (delay, quantisation,
+        # dead-band; v_cmd itself in the ideal plant), the random body torque is held over the step
+        torque_noise_step(pp.hw)
+        rk4_step(t, dt, x, actuator_chain(k, v_cmd, pp.hw), pp, wind, gusts, shocks, extra, work, R)
     return log_row
 
 
@@ -175,7 +194,7 @@ def _log_row(row, t, x, pp, sp, ss, ref, cout, gstate, v_cmd, us):
     row[L.EULER_RATE + 1] = dtheta
     row[L.EULER_RATE + 2] = dpsi
     for i in range(4):
-        row[L.THRUST + i] = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
+        row[L.THRUST + i] = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], pp.hw)
         row[L.V_CMD + i] = v_cmd[i]
         row[L.U + i] = cout[OUT_U + i]
         row[L.THRUST_MEAS + i] = ss.thrust_est[i] if sp.simulate else row[L.THRUST + i]

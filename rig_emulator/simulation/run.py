@@ -20,8 +20,18 @@ from rig_emulator.control.supervisor import F_FAILSAFE, reset_failsafe, supervis
 from rig_emulator.simulation.faults import FaultEvent, FaultInjector, FaultStatus, fault_status
 from rig_emulator.simulation.entry_points import entry_point
 from rig_emulator.simulation.loop import run_steps
+from rig_emulator.control.plugin_layout import P_EXTERNAL
+from rig_emulator.simulation.plugin import plugin_binding, unreported_attitude
 from rig_emulator.simulation.sensing import build_sensing
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
+
+
+def step_time_us(k: int, rate_hz: float) -> int:
+    """Time of physics step ``k`` at ``rate_hz`` in whole microseconds (exact for integer rates)."""
+    rate = float(rate_hz)
+    if rate.is_integer():
+        return (int(k) * 1_000_000) // int(rate)
+    return int(round(int(k) * 1_000_000 / rate))
 
 
 @dataclass
@@ -56,7 +66,12 @@ class SimResult:
 class Simulation:
     """One rig built from a validated config; :meth:`advance` runs the compiled loop in chunks."""
 
-    def __init__(self, cfg: RigConfig, log_capacity: int | None = None):
+    def __init__(self, cfg: RigConfig, log_capacity: int | None = None, controller=None,
+                 external_motors: bool = False):
+        """``controller``: a controller plug-in (``"module:Name"``, a class or an instance of
+        :class:`rig_emulator.controllers.Controller`; default: the config's
+        ``controller.plugin``, none when empty). ``external_motors``: no controller at all, the
+        motor voltages are set with :meth:`set_motor_voltages` between calls (lockstep)."""
         self.cfg = cfg
         self.dt = 1.0 / cfg["sim.physics_rate_hz"]
         self.ctrl_div = int(round(cfg["sim.physics_rate_hz"] / cfg["sim.control_rate_hz"]))
@@ -67,6 +82,10 @@ class Simulation:
         self.dist = disturbances(cfg)
         self.sensing = build_sensing(cfg, self.dt)
         suite = self.sensing.params.suite
+        self.plugin = plugin_binding(cfg, self.cp, suite.imu.n_modules, controller, external_motors)
+        self.plugin_failure = None  # PluginError of the plug-in's failure while armed
+        if self.plugin.ctrl_div is not None:
+            self.ctrl_div = self.plugin.ctrl_div  # the plug-in sets the onboard loop's period
         self.up = self.supervisor_params(cfg)
         self.us = supervisor_state(suite.imu.n_modules, suite.cells.n_cells)
         self.faults = FaultInjector(self)
@@ -79,11 +98,14 @@ class Simulation:
         hover_v = voltage_for_thrust(self.pp.mass * self.pp.g / 4.0, self.pp.k_v, self.pp.v_max)
         self.x[S.MOTOR_V : S.MOTOR_V + 4] = hover_v
         self.v_cmd = np.full(4, hover_v)
+        self.pp.hw.cmd_buf[:] = hover_v  # a delayed actuator starts from the hover command too
         self.cstate = np.zeros(CS_SIZE)
         self.gstate = np.zeros(GS_SIZE)
         self.reached_t = np.full(self.gp.waypoints.shape[0], np.nan)
         self.ref = np.zeros(REF_SIZE)
         self.cout = np.zeros(OUT_SIZE)
+        if external_motors:
+            unreported_attitude(self.cout)
         self.scratch = np.zeros((5, 3))
         self.work = np.zeros((5, S.SIZE))
         self.R = np.zeros((3, 3))
@@ -101,6 +123,12 @@ class Simulation:
     def time(self) -> float:
         return self.k * self.dt
 
+    @property
+    def time_us(self) -> int:
+        """Simulated time in whole microseconds, from the integer step counter (what message
+        time stamps are derived from: no float clock, no rounding down of k dt)."""
+        return step_time_us(self.k, self.cfg["sim.physics_rate_hz"])
+
     def supervisor_params(self, cfg: RigConfig):
         """The supervisor's arguments for ``cfg`` (health thresholds, failsafe) on this rig's sensors."""
         imu = self.sensing.params.suite.imu
@@ -116,6 +144,8 @@ class Simulation:
         """Arming clears a latched failsafe (and its timers); disarming keeps it for the record."""
         if value:
             reset_failsafe(self.us)
+            self.plugin.clear()
+            self.plugin_failure = None
         self._armed = bool(value)
 
     def advance(self, n_steps: int) -> None:
@@ -148,6 +178,7 @@ class Simulation:
             self.cstate, self.gstate, self.reached_t, self.ref, self.cout, self.scratch, self.work, self.R,
             self.log, self.log_row, bool(self._armed),
             self.sensing.params, self.sensing.state, self.sensing.run_rng, self.up, self.us,
+            self.plugin.params, self.plugin.fn,
         )
         key = tuple(id(a) for a in args[5:] if not isinstance(a, (int, float, bool)))
         if key != self._entry_key:
@@ -155,8 +186,37 @@ class Simulation:
             self._entry_key = key
         self.log_row = self._entry(*args)
         self.k += n_steps
+        if self.plugin.params.status[0] != 0 and self.plugin_failure is None:
+            self._plugin_failed()
         if self._armed and self.up.fs_disarm and self.us.flags[F_FAILSAFE] != 0:
             self._armed = False  # the failsafe cut the motors inside the loop; the rig stays disarmed
+
+    def _plugin_failed(self) -> None:
+        """The plug-in failed inside the loop, which disarmed: keep the rig disarmed and the reason."""
+        self._armed = False
+        exc = self.plugin.exc
+        if isinstance(exc, (KeyboardInterrupt, SystemExit)):
+            self.plugin.clear()
+            raise exc
+        self.plugin_failure = self.plugin.failure(self.dt)
+
+    def set_motor_voltages(self, volts) -> None:
+        """Motor voltages 1-4 (V, clipped to the supply) held from the next step on; only a rig
+        built with ``external_motors=True`` (lockstep). Disarmed, the loop holds 0 V."""
+        if self.plugin.params.mode != P_EXTERNAL:
+            raise ValueError("motor commands from outside need a rig built with external_motors=True")
+        v = np.asarray(volts, dtype=np.float64)
+        if v.shape != (4,) or not np.all(np.isfinite(v)):
+            raise ValueError(f"expected 4 finite motor voltages, got {volts!r}")
+        np.clip(v, 0.0, self.pp.v_max, out=self.v_cmd)
+
+    def set_motor_thrusts(self, thrusts) -> None:
+        """Motor thrusts 1-4 (N) held from the next step on, as voltages by Eq. 40 (see
+        :meth:`set_motor_voltages`)."""
+        f = np.asarray(thrusts, dtype=np.float64)
+        if f.shape != (4,) or not np.all(np.isfinite(f)):
+            raise ValueError(f"expected 4 finite motor thrusts, got {thrusts!r}")
+        self.set_motor_voltages(f / self.pp.k_v)
 
     def warm_up(self) -> float:
         """Compile (or load from cache) the loop without advancing it; returns the seconds it took."""
@@ -186,6 +246,8 @@ class Simulation:
         t0 = time.perf_counter()
         self.advance(n_steps)
         wall = time.perf_counter() - t0
+        if self.plugin_failure is not None:
+            raise self.plugin_failure
         return SimResult(
             config=self.cfg,
             log=self.log[: self.log_row].copy(),

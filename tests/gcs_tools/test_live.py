@@ -30,6 +30,7 @@ def gcs(*args, timeout=240):
 
 @pytest.mark.parametrize("name, gen", [("rect.plan", ["--rectangle", "5x3", "--altitude", "2"]),
                                        ("helix.waypoints", ["--helix", "--spacing", "1.5"]),
+                                       ("local.plan", ["--rectangle", "4x2", "--frame", "local"]),
                                        ("global.plan", ["--rectangle", "4x2", "--frame", "global"])])
 def test_mission_file_rig_file_is_identical(rig_url, tmp_path, name, gen):
     src, back = tmp_path / name, tmp_path / f"back-{name}"

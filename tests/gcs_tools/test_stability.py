@@ -81,7 +81,7 @@ def test_kappas_are_the_least_squares_planes_of_the_flown_surface(result):
     from rig_emulator.config.loader import load_config
     from rig_emulator.simulation.params import control_params
 
-    cp = control_params(load_config())
+    cp = control_params(load_config("hilms-ideal"))
     for p, axis in zip(result.planes, (cp.flc_phi, cp.flc_theta, cp.flc_psi)):
         E, DE, U = control_surface(axis, p.e_max, p.de_max, p.grid_points)
         coef, *_ = np.linalg.lstsq(np.column_stack((E.ravel(), DE.ravel())), U.ravel(), rcond=None)

@@ -212,3 +212,24 @@ def test_omega_b_is_mavlink_euler_rate_at_level(yaw_paper, omega_b):
     e1 = np.array(fr.mavlink_euler_from_rwb(r1))
     rates = np.array([math.remainder(d, 2 * math.pi) for d in e1 - e0]) / dt
     np.testing.assert_allclose(rates, fr.mavlink_body_rates_from_omega_b(omega_b), atol=1e-5)
+
+
+# ----------------------------------------------------------------------------- quaternion product path
+
+
+@given(angle, tilt, angle)
+def test_mavlink_quaternion_from_quat_wb_matches_matrix_path(phi, theta, psi):
+    r_wb = fr.rwb_from_paper_euler(phi, theta, psi)
+    q_wb = fr.quaternion_from_rotation(r_wb)
+    q = np.array(fr.mavlink_quaternion_from_quat_wb(q_wb))
+    expected = fr.mavlink_quaternion_from_rwb(r_wb)
+    assert q[0] >= 0.0
+    # the same rotation (q and -q are the same when w = 0)
+    assert min(np.abs(q - expected).max(), np.abs(q + expected).max()) < 1e-12
+
+
+def test_mavlink_quaternion_from_quat_wb_level_east():
+    """Paper psi = 0 is body x east: MAVLink yaw +90 deg, level."""
+    q_wb = fr.quaternion_from_rotation(fr.rwb_from_paper_euler(0.0, 0.0, 0.0))
+    roll, pitch, yaw = fr.mavlink_euler_from_quaternion(fr.mavlink_quaternion_from_quat_wb(q_wb))
+    assert abs(roll) < 1e-12 and abs(pitch) < 1e-12 and abs(yaw - math.pi / 2) < 1e-12

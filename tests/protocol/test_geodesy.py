@@ -178,3 +178,13 @@ def test_small_offsets_match_radii_of_curvature(lat0, lon0, east, north):
     assert math.radians(lat - lat0) * m_radius == pytest.approx(north, abs=tol + 1e-7)
     dlon = math.radians(math.remainder(lon - lon0, 360.0))
     assert dlon * n_radius * math.cos(phi) == pytest.approx(east, abs=tol + 1e-7)
+
+
+@given(st.floats(-89.0, 89.0), st.floats(-180.0, 180.0), st.floats(-400.0, 5000.0),
+       hnp.arrays(np.float64, 3, elements=st.floats(-5000.0, 5000.0)))
+def test_tangent_plane_matches_local_enu_to_global(lat, lon, alt, enu):
+    home = geo.Home(lat, lon, alt)
+    got = geo.TangentPlane(home).to_global(*enu)
+    want = geo.local_enu_to_global(home, enu)
+    assert abs(got[0] - want[0]) < 1e-11 and abs(got[2] - want[2]) < 1e-6
+    assert abs(math.remainder(got[1] - want[1], 360.0)) < 1e-11

@@ -42,7 +42,14 @@ def test_scaling_by_frame():
 
 @pytest.mark.parametrize("item,result", [
     (MissionItem(0, M.MAV_FRAME_LOCAL_ENU, M.MAV_CMD_NAV_WAYPOINT, z=1.0), M.MAV_MISSION_ACCEPTED),
-    (MissionItem(0, M.MAV_FRAME_LOCAL_ENU, M.MAV_CMD_NAV_RETURN_TO_LAUNCH), M.MAV_MISSION_UNSUPPORTED),
+    (MissionItem(0, M.MAV_FRAME_LOCAL_ENU, M.MAV_CMD_NAV_LOITER_TURNS), M.MAV_MISSION_UNSUPPORTED),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_NAV_RETURN_TO_LAUNCH), M.MAV_MISSION_ACCEPTED),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_NAV_DELAY, param1=2.0), M.MAV_MISSION_ACCEPTED),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_NAV_DELAY, param1=-1.0), M.MAV_MISSION_INVALID_PARAM1),
+    (MissionItem(0, M.MAV_FRAME_LOCAL_ENU, M.MAV_CMD_NAV_LOITER_TIME, param1=3.0, z=1.0), M.MAV_MISSION_ACCEPTED),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_JUMP, param1=0.0, param2=3.0), M.MAV_MISSION_ACCEPTED),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_JUMP, param1=0.5, param2=3.0), M.MAV_MISSION_INVALID_PARAM1),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_JUMP, param1=0.0, param2=101.0), M.MAV_MISSION_INVALID_PARAM2),
     (MissionItem(0, M.MAV_FRAME_GLOBAL_TERRAIN_ALT, M.MAV_CMD_NAV_WAYPOINT), M.MAV_MISSION_UNSUPPORTED_FRAME),
     (MissionItem(0, M.MAV_FRAME_LOCAL_ENU, M.MAV_CMD_NAV_WAYPOINT, param1=math.inf), M.MAV_MISSION_INVALID_PARAM1),
     (MissionItem(0, M.MAV_FRAME_LOCAL_ENU, M.MAV_CMD_NAV_WAYPOINT, x=math.nan), M.MAV_MISSION_INVALID_PARAM5_X),
@@ -77,3 +84,24 @@ def test_takeoff_and_land_in_place():
              MissionItem(1, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, M.MAV_CMD_NAV_LAND, x=0.0, y=0.0, z=3.0)]
     plan = mission_plan(items, HOME)
     assert list(plan.free_xy) == [1.0, 1.0] and plan.waypoints[0, 2] == 1.5 and plan.waypoints[1, 2] == 0.0
+
+
+def test_plan_unrolls_jumps_and_ends_at_a_return():
+    """DO_JUMP repeats its legs param2 times; NAV_DELAY holds where the rig is; NAV_RETURN_TO_LAUNCH ends the legs."""
+    enu = M.MAV_FRAME_LOCAL_ENU
+    items = [MissionItem(0, enu, M.MAV_CMD_NAV_TAKEOFF, z=1.0),
+             MissionItem(1, enu, M.MAV_CMD_NAV_WAYPOINT, x=1.0, z=1.0),
+             MissionItem(2, enu, M.MAV_CMD_NAV_WAYPOINT, x=2.0, z=1.0),
+             MissionItem(3, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_JUMP, param1=1.0, param2=2.0),
+             MissionItem(4, M.MAV_FRAME_MISSION, M.MAV_CMD_NAV_DELAY, param1=1.5),
+             MissionItem(5, enu, M.MAV_CMD_NAV_LOITER_TIME, param1=2.0, x=3.0, z=1.0),
+             MissionItem(6, M.MAV_FRAME_MISSION, M.MAV_CMD_NAV_RETURN_TO_LAUNCH),
+             MissionItem(7, enu, M.MAV_CMD_NAV_WAYPOINT, x=9.0, z=1.0)]
+    plan = mission_plan(items, HOME)
+    assert plan.seqs == (0, 1, 2, 1, 2, 1, 2, 4, 5)
+    assert plan.return_seq == 6
+    assert list(plan.holds[-2:]) == [1.5, 2.0] and list(plan.free_xy[-2:]) == [2.0, 0.0]
+    assert plan.nav_index(4) == 7
+    with pytest.raises(ValueError, match="jump target 8"):
+        mission_plan(items[:3] + [MissionItem(3, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_JUMP, param1=8.0, param2=1.0)],
+                     HOME)

@@ -10,10 +10,12 @@ import pytest
 from rig_emulator.guidance import waypoint_switching
 from rig_emulator._jit import jit
 from rig_emulator.config.loader import load_config
-from rig_emulator.control import controller, supervisor
+from rig_emulator.control import allocation, controller, fuzzy, pid, reference_filter, smc, supervisor
+from rig_emulator.estimation import (attitude_pipeline, complementary, ensemble, imu_calibration, load_cell_filter,
+                                     onboard_position)
 from rig_emulator.guidance import runner, trajectories
 from rig_emulator.physics import disturbances, integrator, rigid_body, rotation
-from rig_emulator.sensors import imu_module
+from rig_emulator.sensors import imu_module, sensor_step
 from rig_emulator.simulation import loop
 from rig_emulator.simulation.run import Simulation
 
@@ -68,6 +70,12 @@ STEP_LOOP = (
     runner.guidance_update, runner._waypoints, runner._start_leg, runner._advance, runner.start_at,
     trajectories.helix_eq46, trajectories.harmonic_attitude, waypoint_switching.line_setpoint,
     imu_module._sample_imu_modules, supervisor.supervise,
+    # called, not inlined (the cold compile, issue 14)
+    loop._sense, sensor_step.sensors_step, attitude_pipeline.attitude_estimation_step,
+    load_cell_filter.load_cell_filter_step, onboard_position.onboard_translation_step, smc.smc_attitude,
+    fuzzy.flc_eval, fuzzy.flc_axis, allocation.allocate, pid.pid_axis, complementary.complementary_step,
+    ensemble.ensemble_step, ensemble.ensemble_vectors, imu_calibration.apply_imu_calibration,
+    reference_filter.reference_step,
 )
 
 

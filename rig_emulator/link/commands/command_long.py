@@ -7,12 +7,20 @@ A retry (``confirmation`` > 0) or a duplicated frame of the sender's previous co
 with the previous result without acting twice (:mod:`rig_emulator.link.commands.dedup`).
 Unknown commands get MAV_RESULT_UNSUPPORTED.
 
-Supported: COMPONENT_ARM_DISARM, DO_SET_MODE, REQUEST_MESSAGE, REQUEST_AUTOPILOT_CAPABILITIES,
+Supported: COMPONENT_ARM_DISARM (arming runs the pre-arm checks of
+:mod:`rig_emulator.simulation.prearm` unless param2 is 21196; a refusal is DENIED with
+PX4's "Arming denied: reason" STATUSTEXT), DO_SET_MODE (PX4 modes, :mod:`rig_emulator.link.commands.modes`;
+a mode the rig refuses is DENIED with the reason), DO_SET_STANDARD_MODE and REQUEST_MESSAGE
+for AVAILABLE_MODES (:mod:`rig_emulator.link.commands.standard_modes`), the flight commands of
+:mod:`rig_emulator.link.commands.flight_commands` (NAV_TAKEOFF, NAV_LAND, NAV_RETURN_TO_LAUNCH,
+DO_REPOSITION, DO_CHANGE_SPEED, DO_SET_HOME, PREFLIGHT_REBOOT_SHUTDOWN, DO_MOTOR_TEST,
+DO_LAND_START), REQUEST_MESSAGE, REQUEST_AUTOPILOT_CAPABILITIES,
 SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MISSION_START and
 DO_SET_MISSION_CURRENT (:mod:`rig_emulator.link.mission.executor`), PREFLIGHT_CALIBRATION (param1,
 gyro, or param2, magnetometer, or param5, accelerometer = 1: reruns the IMU calibration
 procedure of Sec. 4-1, disarmed only), MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
-MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/FAULTS.md).
+MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/FAULTS.md),
+DO_FENCE_ENABLE (param1 0/1: the geofence off/on for this run).
 A supported command with unusable parameters is DENIED with a STATUSTEXT saying why.
 A shock outside the ranges of the config's ``disturbance.shocks`` entries (torque within
 +-100 N m, duration in (0, 10] s) is DENIED with the reason; a calibration less than
@@ -29,6 +37,8 @@ from dataclasses import dataclass
 from protocol.dialect import mavlink as M
 from rig_emulator.config.loader import ConfigError, check_value
 from rig_emulator.config.schema import SCHEMA
+from rig_emulator.link.commands import flight_commands
+from rig_emulator.link.commands import standard_modes
 from rig_emulator.link.mission.executor import MISSION_COMMANDS
 from rig_emulator.link.telemetry.stream_table import ON_REQUEST, STREAMS
 from rig_emulator.sensors.faults import FAULT_NAMES
@@ -50,6 +60,7 @@ class Command:
     confirmation: int
     sender: tuple = (0, 0)  # (system id, component id) of the sender
     seq: int = -1  # MAVLink sequence number of the frame
+    frame: int = -1  # COMMAND_INT's frame; -1 for COMMAND_LONG
 
     @classmethod
     def from_long(cls, msg) -> "Command":
@@ -61,7 +72,7 @@ class Command:
     def from_int(cls, msg) -> "Command":
         raw = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
         return cls(msg.command, tuple(_unset_nan(p) for p in raw), 0,
-                   (msg.get_srcSystem(), msg.get_srcComponent()), msg.get_seq())
+                   (msg.get_srcSystem(), msg.get_srcComponent()), msg.get_seq(), msg.frame)
 
     def p(self, i: int):
         """Parameter ``i`` (1..7), ``None`` when unset."""
@@ -73,11 +84,16 @@ class Command:
         return int(v) if v is not None and v == int(v) else None
 
 
+FORCE_ARM_MAGIC = 21196.0  # param2 of COMPONENT_ARM_DISARM: arm without the pre-arm checks (PX4, MAVSDK)
+
+
 def _arm(cmd, srv, channel):
     flag = cmd.p(1)
     if flag not in (0.0, 1.0):
-        return DENIED, []
-    srv.rig.arm(flag == 1.0)
+        return _denied(srv, f"arming refused: param1 {cmd.p(1)} must be 1 (arm) or 0 (disarm)")
+    why = srv.flight.arm(flag == 1.0, force=cmd.p(2) == FORCE_ARM_MAGIC)
+    if why is not None:
+        return _denied(srv, f"Arming denied: {why}")
     srv.heartbeat_pending = True
     return ACCEPTED, []
 
@@ -86,18 +102,15 @@ def _set_mode(cmd, srv, channel):
     base = cmd.int_param(1)
     main = cmd.int_param(2)
     if base is None or not base & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED or main is None:
-        return DENIED, []
-    sub = cmd.int_param(3) or 0
-    if not srv.modes.supports(main, sub):
-        return UNSUPPORTED, []
-    if not srv.modes.enter(main, sub, srv.rig):
-        return DENIED, []
-    srv.heartbeat_pending = True
-    return ACCEPTED, []
+        return _denied(srv, "mode refused: set MAV_MODE_FLAG_CUSTOM_MODE_ENABLED in param1 and PX4's main mode "
+                            "in param2 (sub mode in param3)")
+    return flight_commands.set_mode(srv, main, cmd.int_param(3) or 0)
 
 
 def _request_message(cmd, srv, channel):
     msg_id = cmd.int_param(1)
+    if msg_id == M.MAVLINK_MSG_ID_AVAILABLE_MODES:
+        return standard_modes.request_available_modes(cmd, srv, channel)
     if msg_id is None or msg_id not in ON_REQUEST:
         return UNSUPPORTED, []
     return ACCEPTED, srv.build(msg_id)
@@ -200,7 +213,19 @@ def _sensor_fault(cmd, srv, channel):
     return _act(srv, "fault", srv.rig.set_fault, device, index, mode, 0.0 if magnitude is None else magnitude)
 
 
+def _fence_enable(cmd, srv, channel):
+    """MAV_CMD_DO_FENCE_ENABLE: param1 1 enables, 0 disables the geofence (FENCE_ENABLE, for this
+    run: not stored); 2 (disable the floor only) is refused, the rig's fence has one switch."""
+    flag = cmd.int_param(1)
+    if flag not in (0, 1):
+        return _denied(srv, f"fence enable rejected: param1 {cmd.p(1)} must be 0 (disable) or 1 (enable)")
+    srv.rig.set_param("fence.enabled", bool(flag))
+    srv.broadcast(srv.params.value_message(srv.params.table.by_name["FENCE_ENABLE"]))
+    return ACCEPTED, srv.statustext_messages(M.MAV_SEVERITY_INFO, "fence enabled" if flag else "fence disabled")
+
+
 HANDLERS = {
+    M.MAV_CMD_DO_FENCE_ENABLE: _fence_enable,
     M.MAV_CMD_PREFLIGHT_CALIBRATION: _calibration,
     M.MAV_CMD_HILMS_SENSOR_FAULT: _sensor_fault,
     M.MAV_CMD_COMPONENT_ARM_DISARM: _arm,
@@ -212,7 +237,9 @@ HANDLERS = {
     M.MAV_CMD_GET_MESSAGE_INTERVAL: _get_interval,
     M.MAV_CMD_HILMS_SHOCK: _shock,
     M.MAV_CMD_HILMS_EXTRA_MASS: _extra_mass,
+    M.MAV_CMD_DO_SET_STANDARD_MODE: standard_modes.set_standard_mode,
     **MISSION_COMMANDS,  # MISSION_START, DO_SET_MISSION_CURRENT
+    **flight_commands.FLIGHT_COMMANDS,  # takeoff, land, return, reposition, speed, home, reboot, motor test
 }
 
 

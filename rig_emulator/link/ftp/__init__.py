@@ -1,1 +1,2 @@
-"""MAVFTP (FILE_TRANSFER_PROTOCOL): every request answered with a NAK (:mod:`.nak`)."""
+"""MAVFTP (FILE_TRANSFER_PROTOCOL): the file server (:mod:`.server`) and the component metadata
+it serves (:mod:`.component_metadata`)."""

@@ -16,7 +16,10 @@ Starting and stopping (PX4's interface, which MAVSDK and QGroundControl use):
   ``start_mission`` sends): starts a mission not started yet from the current item,
   resumes a paused one from its current item on a new virtual line from where the rig is;
   a completed mission stays complete (restart it with MISSION_START or a new current item).
-  Refused (MAV_RESULT_DENIED) when disarmed or without a mission.
+  Disarmed, the mode is taken and the mission starts when the rig is armed (PX4; what
+  QGroundControl's "start mission" expects). Refused (MAV_RESULT_DENIED) without a mission.
+* The legs end: a NAV_RETURN_TO_LAUNCH item hands over to AUTO.RTL (return, land, disarm); a
+  mission ending in NAV_LAND disarms once the land detector finds the rig on the ground.
 * Leaving AUTO.MISSION (AUTO.LOITER, POSCTL, OFFBOARD, ...) pauses: the rig holds where it
   is (the mode's own behaviour; if a mode would keep the mission running, the rig holds).
 * ``MAV_CMD_DO_SET_MISSION_CURRENT`` (param1 seq; param2 is not used) and the older
@@ -46,8 +49,10 @@ import math
 import numpy as np
 
 from protocol.dialect import mavlink as M
-from protocol.mission_items import MissionPlan, mission_plan
-from rig_emulator.link.commands.modes import AUTO, AUTO_LOITER, AUTO_MISSION
+from protocol.mission_items import MissionPlan, mission_plan  # noqa: F401 - MissionPlan: the executor's type
+from dataclasses import replace as dc_replace
+
+from rig_emulator.link.commands.modes import AUTO, AUTO_LOITER, AUTO_MISSION, AUTO_RTL
 
 ACCEPTED, DENIED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED
 UINT16_MAX = 65535
@@ -130,12 +135,33 @@ class MissionExecutor:
             self.modes.note(AUTO, AUTO_MISSION)
             self.srv.heartbeat_pending = True
 
-    def _why_not(self) -> str | None:
-        if not self.rig.snapshot().armed:
+    def _why_not(self, armed_needed: bool = True) -> str | None:
+        if armed_needed and not self.rig.armed:
             return "mission refused: arm first"
-        if not self.items or not self._plan().size:
+        if not self.items or not (self._plan().size or self._plan().return_seq >= 0):
             return "mission refused: no mission (or no navigation item) stored"
         return None
+
+    def after_reboot(self) -> None:
+        """A reboot restarted the simulation: the stored mission stays, not started."""
+        self._flown = None
+        self._nav = 0
+        self.state = NOT_STARTED if self.items else NO_MISSION
+        self.current_seq = self._plan().first_seq if self.items and self._plan().count > self._plan().first_seq else 0
+        self.announce()
+
+    def _finish(self) -> None:
+        """The last leg is done: a NAV_RETURN_TO_LAUNCH item returns (AUTO.RTL), a final
+        NAV_LAND disarms once the land detector finds the rig on the ground."""
+        plan = self._flown
+        if plan is None:
+            return
+        if plan.return_seq >= 0:
+            self.srv.event(f"mission: item {plan.return_seq} NAV_RETURN_TO_LAUNCH, returning")
+            self.modes.enter(AUTO, AUTO_RTL, self.rig)
+            self.srv.heartbeat_pending = True
+        elif plan.size and plan.lands.shape[0] == plan.size and plan.lands[-1]:
+            self.srv.flight.tasks.watch_landing()
 
     def _refuse(self, reason: str) -> tuple[int, list]:
         return DENIED, self.srv.statustext_messages(M.MAV_SEVERITY_WARNING, reason)
@@ -155,11 +181,17 @@ class MissionExecutor:
         last = n - 1 if last is None or last == 0 or last < first else int(last)
         if last < n - 1:
             keep = [i for i, s in enumerate(plan.seqs) if s <= last]
-            plan = MissionPlan(waypoints=plan.waypoints[keep], radii=plan.radii[keep], holds=plan.holds[keep],
-                               speeds=plan.speeds[keep], free_xy=plan.free_xy[keep],
-                               seqs=tuple(plan.seqs[i] for i in keep), count=plan.count, first_seq=plan.first_seq)
+            plan = dc_replace(plan, waypoints=plan.waypoints[keep], radii=plan.radii[keep], holds=plan.holds[keep],
+                              speeds=plan.speeds[keep], free_xy=plan.free_xy[keep], lands=plan.lands[keep],
+                              seqs=tuple(plan.seqs[i] for i in keep),
+                              return_seq=plan.return_seq if plan.return_seq <= last else -1)
         index = plan.nav_index(first)
         if index is None:
+            if plan.return_seq >= first:  # nothing to fly before the return
+                self._flown, self.state = plan, COMPLETE
+                self._finish()
+                self.announce()
+                return ACCEPTED, []
             return self._refuse(f"mission refused: no navigation item in {first}..{last}")
         self._fly(plan, index, keep_reached=False)
         self.announce()
@@ -188,11 +220,28 @@ class MissionExecutor:
         return ACCEPTED, []
 
     def _enter_mission_mode(self, rig) -> bool:
-        """FlightModes handler of AUTO.MISSION: False refuses the mode."""
-        why = self._why_not()
+        """FlightModes handler of AUTO.MISSION: False refuses the mode. Disarmed with a
+        mission, the mode is taken and the mission starts on arming (PX4; QGroundControl's
+        "start mission" switches to Mission first, then arms)."""
+        why = self._why_not(armed_needed=False)
         if why is not None:
-            self.srv.statustext(None, M.MAV_SEVERITY_WARNING, why)
-            return False
+            return why
+        if not self.rig.armed:
+            return True
+        return self._fly_from_mode()
+
+    def armed_in_mission_mode(self) -> None:
+        """The rig was armed in AUTO.MISSION: fly (FlightControl.arm calls this)."""
+        outcome = self._fly_from_mode()
+        if outcome is not True:
+            self.srv.statustext(None, M.MAV_SEVERITY_WARNING, str(outcome))
+            self.modes.note(AUTO, AUTO_LOITER)
+            self.rig.hold_position()
+            self.srv.heartbeat_pending = True
+        self.announce()
+
+    def _fly_from_mode(self) -> bool | str:
+        """Fly (or resume) from AUTO.MISSION; the reason when there is nothing to fly."""
         if self.state == ACTIVE:
             return True
         if self.state == COMPLETE:
@@ -204,8 +253,7 @@ class MissionExecutor:
             plan = self._plan()
             index = plan.nav_index(self.current_seq)
             if index is None:
-                self.srv.statustext(None, M.MAV_SEVERITY_WARNING, "mission refused: no navigation item left")
-                return False
+                return "mission refused: no navigation item left"
             self._fly(plan, index, keep_reached=False)
         return True
 
@@ -223,6 +271,7 @@ class MissionExecutor:
                 self._nav = st.index
                 if st.done:
                     self.state = COMPLETE
+                    self._finish()
         self.announce()
 
     def _report_reached(self, reached_t: np.ndarray) -> None:
@@ -233,6 +282,7 @@ class MissionExecutor:
             return
         for i in np.flatnonzero(new):
             self.srv.broadcast(M.MAVLink_mission_item_reached_message(seq=self._flown.seqs[i]))
+            self.srv.console.line(self.rig.time_s, f"mission: reached item {self._flown.seqs[i]}")
             self.reached_count += 1
         self._reported_t = reached_t.copy()
 

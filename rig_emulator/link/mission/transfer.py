@@ -17,7 +17,9 @@ MISSION_ACK again (the peer missed it).
 Results (MISSION_ACK.type): ACCEPTED; NO_SPACE (more than :data:`MAX_ITEMS`);
 INVALID_SEQUENCE (an item beyond the announced count, a request beyond the mission);
 UNSUPPORTED / UNSUPPORTED_FRAME / INVALID_PARAMx for an item the rig cannot fly
-(:func:`protocol.mission_items.validate_item`, reason also in a STATUSTEXT); DENIED;
+(:func:`protocol.mission_items.validate_item`, reason also in a STATUSTEXT) or, once every
+item is in, for an item outside the geofence, under the ground or ending a leg longer than
+MIS_DIST_WPS (:mod:`protocol.mission_checks`, the field the result names); DENIED;
 OPERATION_CANCELLED; ERROR when the new (or cleared) mission cannot be stored in the
 state directory (the previous one stays). MISSION_COUNT 0 clears the mission.
 
@@ -37,7 +39,10 @@ import time
 from dataclasses import dataclass, field
 
 from protocol.dialect import mavlink as M
-from protocol.mission_items import item_from_message, item_to_float_message, item_to_int_message, validate_item
+from protocol.mission_checks import check_plan
+from protocol.mission_items import (item_from_message, item_to_float_message, item_to_int_message, mission_plan,
+                                    validate_item)
+from rig_emulator.link.commands.flight_monitors import mission_limits
 from rig_emulator.link.state.directory import StateWriteError
 
 RETRY_S = 0.25  # PX4: MAVLINK_MISSION_RETRY_TIMEOUT_DEFAULT
@@ -162,8 +167,13 @@ class MissionTransfer:
         if len(up.items) < up.count:
             self._request_missing(now)
             return
+        items = [up.items[i] for i in range(up.count)]
+        result, reason = self._plausible(items)
+        if result != M.MAV_MISSION_ACCEPTED:
+            self._fail(result, reason)
+            return
         try:
-            self.executor.replace(up.items[i] for i in range(up.count))
+            self.executor.replace(items)
         except StateWriteError as exc:
             self._fail(M.MAV_MISSION_ERROR, str(exc))
             return
@@ -174,6 +184,15 @@ class MissionTransfer:
         self.uploads_done += 1
         self._completed[channel] = up.count
         self._ack(channel, up.peer, M.MAV_MISSION_ACCEPTED)
+
+    def _plausible(self, items) -> tuple[int, str]:
+        """The whole-mission checks of :mod:`protocol.mission_checks` (fence, ground, leg length)."""
+        cfg = self.srv.rig.cfg
+        try:
+            plan = mission_plan(items, self.srv.ctx.home, bool(cfg["mission.item0_home"]))
+        except ValueError as exc:
+            return M.MAV_MISSION_INVALID, str(exc)
+        return check_plan(plan, mission_limits(cfg))
 
     def peer_ack(self, msg, channel) -> None:
         """MISSION_ACK from a peer: the end of its download, or its cancellation of our upload."""

@@ -49,6 +49,7 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "motors.thrust_ceiling_grf": ("MOT_F_MAX_GRF", None),
     "motors.time_constant": ("MOT_TAU", None),
     "motors.kf": ("MOT_KF", None),
+    "motors.kv_rpm_per_v": ("MOT_KV", None),
     "control.strategy": ("CTL_STRATEGY", None),
     "control.max_tilt_deg": ("CTL_MAX_TILT", None),
     "control.reference_time_constant": ("CTL_REF_TAU", None),
@@ -90,7 +91,18 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "guidance.speed": ("GUI_SPEED", None),
     "guidance.switching_radius": ("WP_RADIUS", None),
     "guidance.min_leg_time": ("GUI_MIN_LEG_T", None),
+    "guidance.takeoff_altitude": ("MIS_TAKEOFF_ALT", None),  # PX4's names: MAVSDK and QGroundControl use them
+    "guidance.return_altitude": ("RTL_RETURN_ALT", None),
+    "guidance.land_speed": ("MPC_LAND_SPEED", None),
     "mission.item0_home": ("MIS_ITEM0_HOME", None),
+    "mission.max_leg_m": ("MIS_DIST_WPS", None),
+    "fence.enabled": ("FENCE_ENABLE", None),
+    "fence.action": ("FENCE_ACTION", None),
+    "fence.radius": ("FENCE_RADIUS", None),
+    "fence.alt_max": ("FENCE_ALT_MAX", None),
+    "fence.alt_min": ("FENCE_ALT_MIN", None),
+    "offboard.loss_timeout": ("COM_OF_LOSS_T", None),
+    "offboard.loss_action": ("COM_OBL_ACT", None),
     "disturbance.wind_force": ("DIST_WIND", XYZ),
     "sensors.simulate": ("SENS_SIMULATE", None),
     "sensors.feedback": ("SENS_FEEDBACK", None),
@@ -111,6 +123,10 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "failsafe.rate_limit_deg_s": ("FS_RATE", None),
     "failsafe.hold_time": ("FS_HOLD_T", None),
     "failsafe.on_estimate_invalid": ("FS_ON_EST", None),
+    "failsafe.gcs_timeout": ("COM_DL_LOSS_T", None),
+    "failsafe.gcs_action": ("NAV_DLL_ACT", None),
+    "prearm.max_tilt_deg": ("ARM_MAX_TILT", None),
+    "prearm.max_rate_deg_s": ("ARM_MAX_RATE", None),
 }
 
 #: schema keys that are not parameters of a running rig, and why

@@ -21,6 +21,8 @@ class TelemetryContext:
     counters: LinkCounters
     sysid: int
     mission: object = None  # MissionExecutor: MISSION_CURRENT's builder reads it
+    fence: object = None  # FenceMonitor (flight_monitors.py): SYS_STATUS's GEOFENCE bits, FENCE_STATUS
+    flight: object = None  # FlightControl: home and the flight task (HOME_POSITION, EXTENDED_SYS_STATE)
     load_fraction: float = 0.0  # share of wall time the loop spends working (SYS_STATUS.load)
     boot_unix_s: float = field(default_factory=time.time)
     _cache: tuple = (None, None)

@@ -83,10 +83,13 @@ def gps_raw_int(snap, ctx):
 
 
 def home_position(snap, ctx):
-    home = ctx.home
+    """Home: the local origin (``--home``) moved by DO_SET_HOME (its height stays on the ground)."""
+    enu = ctx.flight.tasks.home if ctx.flight is not None else np.zeros(3)
+    lat, lon, alt = local_enu_to_global(ctx.home, enu)
+    n, e, d = enu_to_ned(enu)
     return mavlink.MAVLink_home_position_message(
-        latitude=U.deg_e7(home.lat_deg), longitude=U.deg_e7(home.lon_deg), altitude=U.mm(home.alt_m),
-        x=0.0, y=0.0, z=0.0, q=[1.0, 0.0, 0.0, 0.0], approach_x=0.0, approach_y=0.0, approach_z=0.0,
+        latitude=U.deg_e7(lat), longitude=U.deg_e7(lon), altitude=U.mm(alt),
+        x=float(n), y=float(e), z=float(d), q=[1.0, 0.0, 0.0, 0.0], approach_x=0.0, approach_y=0.0, approach_z=0.0,
         time_usec=U.time_usec(snap.time_s))
 
 

@@ -1,8 +1,14 @@
 """Status messages: HEARTBEAT, SYS_STATUS, EXTENDED_SYS_STATE, SYSTEM_TIME, SERVO_OUTPUT_RAW,
 MISSION_CURRENT, and the on-request AUTOPILOT_VERSION. One builder per message, ``(snapshot, ctx) -> message``.
 
-Identity: MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_GENERIC, component MAV_COMP_ID_AUTOPILOT1; the
-flight mode is reported in PX4's custom-mode layout (:mod:`rig_emulator.link.commands.modes`).
+Identity: MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_PX4, component MAV_COMP_ID_AUTOPILOT1: the rig
+implements PX4's flight modes and command semantics (:mod:`rig_emulator.link.commands.modes`), so
+pymavlink/MAVProxy, MAVSDK and QGroundControl decode its mode and send PX4's commands.
+AUTOPILOT_VERSION.flight_sw_version is hilms-sil's own version (QGroundControl's PX4 plugin
+shows a "supports PX4 Pro firmware 1.4.1 and above" notice for it; nothing else depends on it).
+
+EXTENDED_SYS_STATE.landed_state: ON_GROUND while disarmed, TAKEOFF while a take-off climbs,
+LANDING while a landing descends (land detector on), else IN_AIR.
 
 Faults (docs/FAULTS.md) map onto SYS_STATUS health bits and HEARTBEAT.system_status from the
 snapshot's plain-data :class:`~rig_emulator.simulation.faults.FaultStatus`:
@@ -33,6 +39,7 @@ from importlib import metadata
 from protocol.dialect import mavlink
 from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_RATE, INVALID_ACCEL, INVALID_GYRO, INVALID_MAG
 from rig_emulator.link.telemetry import units as U
+from rig_emulator.link.telemetry.power import supply_fields
 
 M = mavlink
 GYRO, ACCEL, MAG = M.MAV_SYS_STATUS_SENSOR_3D_GYRO, M.MAV_SYS_STATUS_SENSOR_3D_ACCEL, M.MAV_SYS_STATUS_SENSOR_3D_MAG
@@ -41,12 +48,14 @@ CONTROL_BITS = (M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL | M.MAV_SYS_STATUS_
                 | M.MAV_SYS_STATUS_SENSOR_YAW_POSITION | M.MAV_SYS_STATUS_SENSOR_Z_ALTITUDE_CONTROL
                 | M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL)
 ALWAYS_ON = M.MAV_SYS_STATUS_SENSOR_GPS | M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | M.MAV_SYS_STATUS_AHRS
-PRESENT = GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON | CONTROL_BITS | M.MAV_SYS_STATUS_PREARM_CHECK
+PRESENT = (GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON | CONTROL_BITS | M.MAV_SYS_STATUS_PREARM_CHECK
+           | M.MAV_SYS_STATUS_GEOFENCE)
 SENSOR_BITS = GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON
 _KINDS = ((GYRO, GYRO2, INVALID_GYRO), (ACCEL, ACCEL2, INVALID_ACCEL), (MAG, MAG2, INVALID_MAG))
 CAPABILITIES = (M.MAV_PROTOCOL_CAPABILITY_MISSION_INT | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
                 | M.MAV_PROTOCOL_CAPABILITY_MAVLINK2 | M.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
-                | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED)
+                | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
+                | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT | M.MAV_PROTOCOL_CAPABILITY_FTP)
 
 
 def _version_number(text: str) -> int:
@@ -79,15 +88,16 @@ def heartbeat(snap, ctx):
     if snap.armed:
         base |= M.MAV_MODE_FLAG_SAFETY_ARMED
     return M.MAVLink_heartbeat_message(
-        type=M.MAV_TYPE_QUADROTOR, autopilot=M.MAV_AUTOPILOT_GENERIC, base_mode=base,
+        type=M.MAV_TYPE_QUADROTOR, autopilot=M.MAV_AUTOPILOT_PX4, base_mode=base,
         custom_mode=ctx.modes.custom_mode, system_status=system_status(snap), mavlink_version=3)
 
 
 def sensor_health_bits(snap, ctx) -> int:
     """SYS_STATUS health from the snapshot's fault status (mapping in the module doc)."""
-    # The rig has no geofence, so none can be breached: ground stations such as MAVProxy read a
-    # cleared GEOFENCE health bit as "fence breach" whether or not the fence is present.
+    # GEOFENCE health is cleared only while the rig is outside its fence (MAVProxy says "fence breach")
     health = SENSOR_BITS | CONTROL_BITS | M.MAV_SYS_STATUS_GEOFENCE
+    if ctx.fence is not None and ctx.fence.breached:
+        health &= ~M.MAV_SYS_STATUS_GEOFENCE
     f = snap.faults
     if f is not None:
         imu_injected = any(f.imu_faults)
@@ -111,12 +121,14 @@ def sensor_health_bits(snap, ctx) -> int:
 
 def sys_status(snap, ctx):
     enabled = PRESENT if snap.armed else PRESENT & ~CONTROL_BITS
+    if ctx.cfg["fence.enabled"]:
+        enabled |= M.MAV_SYS_STATUS_GEOFENCE
     dropped = sum(ctx.counters.dropped.values())
     total = ctx.counters.received + dropped
     return M.MAVLink_sys_status_message(
         onboard_control_sensors_present=PRESENT, onboard_control_sensors_enabled=enabled,
         onboard_control_sensors_health=sensor_health_bits(snap, ctx), load=U.clamp_int(ctx.load_fraction * 1000.0, 0, 1000),
-        voltage_battery=U.clamp_int(ctx.cfg["motors.voltage_max"] * 1000.0, 0, 65534), current_battery=-1,
+        **supply_fields(snap, ctx),  # the bench supply (telemetry_power.py)
         battery_remaining=-1, drop_rate_comm=U.clamp_int(10000.0 * dropped / total, 0, 10000) if total else 0,
         errors_comm=dropped % 65536, errors_count1=0, errors_count2=0, errors_count3=0, errors_count4=0,
         onboard_control_sensors_present_extended=0, onboard_control_sensors_enabled_extended=0,
@@ -125,6 +137,12 @@ def sys_status(snap, ctx):
 
 def extended_sys_state(snap, ctx):
     landed = M.MAV_LANDED_STATE_IN_AIR if snap.armed else M.MAV_LANDED_STATE_ON_GROUND
+    tasks = ctx.flight.tasks if ctx.flight is not None else None
+    if snap.armed and tasks is not None:
+        if tasks.landing:
+            landed = M.MAV_LANDED_STATE_LANDING
+        elif tasks.task == "takeoff":
+            landed = M.MAV_LANDED_STATE_TAKEOFF
     return M.MAVLink_extended_sys_state_message(vtol_state=M.MAV_VTOL_STATE_UNDEFINED, landed_state=landed)
 
 

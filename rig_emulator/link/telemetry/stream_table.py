@@ -16,7 +16,11 @@ from rig_emulator.link.telemetry import attitude as A
 from rig_emulator.link.telemetry import position as P
 from rig_emulator.link.telemetry import sensors as S
 from rig_emulator.link.telemetry import status as T
+from rig_emulator.link.ftp.component_metadata import component_information_message, component_metadata_message
 from rig_emulator.link.telemetry.link_status import link_status
+from rig_emulator.link.telemetry.power import battery_status
+from rig_emulator.link.commands.standard_modes import current_mode
+from rig_emulator.link.commands.standard_modes import monitor as modes_monitor
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,7 @@ STREAMS: dict[int, Stream] = {s.msg_id: s for s in (
     _s(M.MAVLink_extended_sys_state_message, 1.0, T.extended_sys_state, M.MAV_DATA_STREAM_EXTENDED_STATUS),
     _s(M.MAVLink_gps_raw_int_message, 2.0, P.gps_raw_int, M.MAV_DATA_STREAM_EXTENDED_STATUS),
     _s(M.MAVLink_mission_current_message, 1.0, T.mission_current, M.MAV_DATA_STREAM_EXTENDED_STATUS),
+    _s(M.MAVLink_battery_status_message, 1.0, battery_status, M.MAV_DATA_STREAM_EXTENDED_STATUS),
     _s(M.MAVLink_system_time_message, 1.0, T.system_time, M.MAV_DATA_STREAM_EXTRA3),
     _s(M.MAVLink_home_position_message, 0.5, P.home_position, M.MAV_DATA_STREAM_EXTRA3),
     _s(M.MAVLink_attitude_message, 25.0, A.attitude, M.MAV_DATA_STREAM_EXTRA1),
@@ -63,6 +68,12 @@ ON_REQUEST: dict[int, Callable] = {
     M.MAVLINK_MSG_ID_HEARTBEAT: T.heartbeat,
     M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: T.autopilot_version,
     M.MAVLINK_MSG_ID_NAMED_VALUE_INT: link_status,  # the link and loop counters (rig_emulator.link.telemetry.link_status)
+    M.MAVLINK_MSG_ID_COMPONENT_METADATA: component_metadata_message,  # where the metadata files are (MAVFTP)
+    M.MAVLINK_MSG_ID_COMPONENT_INFORMATION: component_information_message,
+    M.MAVLINK_MSG_ID_FENCE_STATUS: lambda snap, ctx: ctx.fence.status_message(),
+    # standard modes (rig_emulator.link.commands.standard_modes; AVAILABLE_MODES itself takes an index: commands.py)
+    M.MAVLINK_MSG_ID_CURRENT_MODE: lambda snap, ctx: current_mode(ctx.modes),
+    M.MAVLINK_MSG_ID_AVAILABLE_MODES_MONITOR: lambda snap, ctx: modes_monitor(),
     **{msg_id: s.build for msg_id, s in STREAMS.items()},
 }
 

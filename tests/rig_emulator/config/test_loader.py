@@ -15,7 +15,7 @@ def test_defaults_cover_the_whole_schema():
 
 @pytest.mark.parametrize(
     "name, mass, ixx, izz, arm",
-    [("hilms", 2.23, 6.2e-2, 1.16e-1, 0.28), ("os4", 0.65, 7.5e-3, 1.3e-2, 0.23), ("draganflyer", 0.5, 4.85e-3, 8.81e-3, 0.2)],
+    [("hilms", 2.23, 6.2e-2, 1.16e-1, 0.28), ("hilms-ideal", 2.23, 6.2e-2, 1.16e-1, 0.28), ("os4", 0.65, 7.5e-3, 1.3e-2, 0.23), ("draganflyer", 0.5, 4.85e-3, 8.81e-3, 0.2)],
 )
 def test_table_2_airframes(name, mass, ixx, izz, arm):
     cfg = load_config(airframe=name)
@@ -41,6 +41,18 @@ def test_every_scenario_preset_loads():
         ("disturbance.shocks", [{"t": 1.0, "arm": 5, "torque": 1.0, "duration": 0.1}], ["disturbance.shocks[0].arm", "[1, 4]"]),
         ("sim.duration", float("nan"), ["sim.duration", "finite"]),
         ("sim.ground", 1, ["sim.ground", "true or false"]),
+        ("joint.viscous", [0.1, -0.1, 0.0], ["joint.viscous[1]", "[0, 10]"]),
+        ("joint.cog_offset", [0.0, 0.0, 0.5], ["joint.cog_offset[2]", "[-0.1, 0.1] m"]),
+        ("motors.thrust_gain", [1.0, 1.0, 1.0], ["motors.thrust_gain", "exactly 4"]),
+        ("motors.curve_exponent", 0.5, ["motors.curve_exponent", "[1, 3]"]),
+        ("motors.command_steps", 2.5, ["motors.command_steps", "integer"]),
+        ("control.actuation_delay", 0.5, ["control.actuation_delay", "[0, 0.1] s"]),
+        ("smc.gain_reading", "newton", ["smc.gain_reading", "'thrust'"]),
+        ("smc.lambda_reading", "rad", ["smc.lambda_reading", "'deg'"]),
+        ("disturbance.torque_noise_corner_hz", 0.0, ["disturbance.torque_noise_corner_hz", "(0"]),
+        ("vibration.blades", 0, ["vibration.blades", "[1, 8]"]),
+        ("controller_model.inertia_scale", [1.0, 0.0, 1.0], ["controller_model.inertia_scale[1]"]),
+        ("flc.position_rate_share", 1.5, ["flc.position_rate_share", "[0, 1]"]),
     ],
 )
 def test_bad_values_name_the_key_and_range(key, value, words):
@@ -84,3 +96,44 @@ def test_parse_override_takes_toml_values_and_bare_words():
 def test_waypoint_guidance_needs_waypoints():
     with pytest.raises(ConfigError, match="guidance.waypoints"):
         load_config(overrides={"guidance.type": "waypoints", "guidance.waypoints": []})
+
+
+def test_hilms_is_hilms_ideal_plus_its_hardware_preset():
+    """Issue 13: the default airframe is the hardware rig; ``hilms-ideal`` has every effect neutral."""
+    hw, ideal = load_config("hilms"), load_config("hilms-ideal")
+    differ = {k for k in SCHEMA if hw[k] != ideal[k]}
+    assert differ and all(not k.startswith(("airframe.", "sim.", "guidance.")) for k in differ - {"airframe.name"})
+    assert ideal["joint.viscous"] == [0.0, 0.0, 0.0] and ideal["smc.gain_reading"] == "si"
+    assert ideal["motors.curve_exponent"] == 1.0 and ideal["control.actuation_delay"] == 0.0
+    assert load_config()["airframe.name"] == "hilms"
+    # user layers still win over the hardware preset
+    assert load_config("hilms", overrides={"joint.viscous": [0.0, 0.0, 0.0]})["joint.viscous"] == [0.0, 0.0, 0.0]
+
+
+def test_airframe_preset_keys_based_on_and_hardware_are_checked(tmp_path, monkeypatch):
+    from rig_emulator.config import loader
+
+    root = tmp_path / "presets"
+    (root / "airframes").mkdir(parents=True)
+    (root / "hardware").mkdir()
+    (root / "rig.toml").write_text((loader._preset_dir() / "rig.toml").read_text())
+    (root / "airframes" / "base.toml").write_text((loader._preset_dir("airframes") / "hilms-ideal.toml").read_text())
+    (root / "airframes" / "rig.toml").write_text('based_on = "base"\nhardware = "mine"\nmass = 3.0\n')
+    (root / "airframes" / "loop.toml").write_text('based_on = "loop"\n')
+    (root / "airframes" / "nohw.toml").write_text('based_on = "base"\nhardware = "missing"\n')
+    (root / "hardware" / "mine.toml").write_text("[joint]\nviscous = [0.1, 0.1, 0.1]\n")
+    monkeypatch.setattr(loader, "_preset_dir", lambda kind=None: root / kind if kind else root)
+    loader._parsed_preset.cache_clear()
+    loader._validated_presets.cache_clear()
+    loader._base_preset.cache_clear()
+    try:
+        cfg = load_config("rig")
+        assert cfg["airframe.mass"] == 3.0 and cfg["airframe.ixx"] == 6.2e-2 and cfg["joint.viscous"] == [0.1] * 3
+        with pytest.raises(ConfigError, match="loop"):
+            load_config("loop")
+        with pytest.raises(ConfigError, match="missing"):
+            load_config("nohw")
+    finally:
+        loader._parsed_preset.cache_clear()
+        loader._validated_presets.cache_clear()
+        loader._base_preset.cache_clear()

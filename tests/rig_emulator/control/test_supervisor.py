@@ -14,7 +14,7 @@ DT = 0.002
 
 
 def _setup(**overrides):
-    cfg = load_config(overrides={"failsafe.hold_time": 0.1, "health.reject_window": 0.05,
+    cfg = load_config("hilms-ideal", overrides={"failsafe.hold_time": 0.1, "health.reject_window": 0.05,
                                  "health.update_rate_hz": 1.0 / DT, **overrides})
     return SV.supervisor_params(cfg, 5, G, FIELD, DT), SV.supervisor_state(5, 4)
 
@@ -122,7 +122,7 @@ def test_attitude_error_is_against_the_desired_attitude():
 
 
 def test_update_rate_is_a_whole_number_of_control_periods():
-    cfg = load_config(overrides={"health.update_rate_hz": 120.0})
+    cfg = load_config("hilms-ideal", overrides={"health.update_rate_hz": 120.0})
     up = SV.supervisor_params(cfg, 5, G, FIELD, 0.002, 2)  # 500 Hz control at 1 kHz physics
     assert up.div == 8  # 1 / (120 Hz x 2 ms) = 4.2 -> 4 control periods of 2 steps
     assert math.isclose(up.share_alpha, 1.0 - math.exp(-0.008 / cfg["health.reject_window"]))

@@ -10,7 +10,7 @@ from rig_emulator.simulation.params import guidance_params
 
 
 def _setup(speeds, free_xy):
-    cfg = load_config()
+    cfg = load_config("hilms-ideal")
     wp = [[2.0, 0.0, 1.0], [2.0, 3.0, 1.0], [0.0, 0.0, 0.0]]
     gp = guidance_params(cfg, wp, None, None, speeds, free_xy)._replace(gtype=WAYPOINTS)
     return cfg, gp, np.zeros(GS_SIZE), np.full(3, np.nan), np.zeros(REF_SIZE)

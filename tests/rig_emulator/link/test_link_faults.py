@@ -99,7 +99,11 @@ def test_motor_thrust_loss_then_the_loss_of_control_failsafe(rig, client):
     later = _texts_for(client, 0.6)
     assert not any(t.startswith("loss of control") for t in later), later  # once
     assert command(client, FAULT, MOTOR, 2, M.HILMS_FAULT_NONE).result == ACCEPTED
-    assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED  # arming clears the latch
+    # the ideal plant tumbles on once the motors stop: the pre-arm checks refuse a plain arm ...
+    assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_DENIED
+    assert _text(client, lambda t: t.startswith("Arming denied: ")) is not None
+    # ... a forced arm (param2 21196, as PX4 and MAVSDK's arm_force) clears the latch
+    assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1, 21196).result == ACCEPTED
     assert _text(client, lambda t: t == "failsafe cleared (armed again)") is not None
     hb = recv(client, "HEARTBEAT", condition=lambda m: m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
     assert hb.system_status != M.MAV_STATE_EMERGENCY

@@ -9,11 +9,11 @@ from hypothesis import strategies as st
 
 from protocol.dialect import mavlink as M
 from protocol.frames import mavlink_quaternion_from_rwb, rwb_from_paper_euler
-from rig_emulator.link.ftp import nak as ftp
+from rig_emulator.link.ftp import server as ftp
 from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.commands.command_long import Command
 from rig_emulator.link.commands.modes import AUTO, AUTO_MISSION, POSCTL, FlightModes, custom_mode, split_custom_mode
-from rig_emulator.link.commands.offboard import rwb_from_mavlink_quaternion
+from rig_emulator.link.commands.offboard_setpoints import rwb_from_mavlink_quaternion
 from rig_emulator.link.telemetry.streams import StreamSchedule
 from rig_emulator.link.telemetry.attitude import body_rates_from_paper_euler_rates
 from rig_emulator.physics.rotation import euler_rates_from_body_rates
@@ -87,16 +87,16 @@ def test_nan_command_params_are_unset():
     assert cmd.int_param(1) == 1 and cmd.int_param(2) is None
 
 
-def test_ftp_requests_get_a_nak_with_the_next_seq():
-    req = bytes([7, 0, 0, 4, 5, 0, 0, 0, 0, 0, 0, 0]) + b"@PARAM/param.pck"
+def test_ftp_param_pck_gets_a_nak_with_the_next_seq():
+    req = bytes([7, 0, 0, 4, 16, 0, 0, 0, 0, 0, 0, 0]) + b"@PARAM/param.pck"
     msg = M.MAVLink_file_transfer_protocol_message(0, 1, 1, list(req.ljust(251, b"\0")))
     msg._header = M.MAVLink_header(msg.id, srcSystem=255, srcComponent=190)
-    reply = ftp.nak_for(msg)
+    (payload,) = ftp.FtpServer(ftp.FileStore({})).handle(bytes(msg.payload))
+    reply = ftp.reply_message(payload, msg)
     payload = bytes(reply.payload)
     seq, session, opcode, size, req_opcode = ftp.HEADER.unpack_from(payload)[:5]
     assert (seq, opcode, size, req_opcode, payload[12]) == (8, ftp.OP_NAK, 1, 4, ftp.ERR_FILE_NOT_FOUND)
     assert reply.target_system == 255
-    assert ftp.nak_for(M.MAVLink_file_transfer_protocol_message(0, 1, 1, [0] * 251)) is not None
 
 
 @pytest.mark.parametrize("spec", ["serial:/dev/ttyS0", "udpout:127.0.0.1", "tcpin:host:99999", "nonsense"])

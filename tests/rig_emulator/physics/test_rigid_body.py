@@ -14,7 +14,7 @@ from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import euler_from_quat, quat_from_euler
 from rig_emulator.simulation.params import disturbances, physics_params
 
-CFG = load_config(overrides={"sim.ground": False})
+CFG = load_config("hilms-ideal", overrides={"sim.ground": False})
 PP = physics_params(CFG)
 NO_DIST = disturbances(CFG)
 
@@ -88,7 +88,7 @@ def test_rotor_gyroscopic_term_couples_roll_rate_into_pitch():
 
 
 def test_shock_on_arm_1_pitches_body_y_negative():
-    cfg = load_config(overrides={"disturbance.shocks": [{"t": 1.0, "arm": 1, "torque": 2.0, "duration": 0.1}]})
+    cfg = load_config("hilms-ideal", overrides={"disturbance.shocks": [{"t": 1.0, "arm": 1, "torque": 2.0, "duration": 0.1}]})
     d = disturbances(cfg)
     assert _deriv(_state(), t=0.5, dist=d)[S.OMEGA + 1] == 0.0
     assert _deriv(_state(), t=1.05, dist=d)[S.OMEGA + 1] == pytest.approx(-2.0 / PP.iyy)
@@ -96,7 +96,7 @@ def test_shock_on_arm_1_pitches_body_y_negative():
 
 
 def test_extra_mass_adds_inertia_and_gravity_torque():
-    cfg = load_config(overrides={"disturbance.extra_masses": [{"arm": 2, "mass": 0.1, "distance": 0.33}]})
+    cfg = load_config("hilms-ideal", overrides={"disturbance.extra_masses": [{"arm": 2, "mass": 0.1, "distance": 0.33}]})
     d = disturbances(cfg)
     dx = _deriv(_state(), dist=d)
     # arm 2 is +y_B; gravity is +z_B at level: torque x = p_y m g
@@ -106,13 +106,13 @@ def test_extra_mass_adds_inertia_and_gravity_torque():
 
 
 def test_wind_force_enters_eq1():
-    cfg = load_config(overrides={"disturbance.wind_force": [1.0, -2.0, 0.5]})
+    cfg = load_config("hilms-ideal", overrides={"disturbance.wind_force": [1.0, -2.0, 0.5]})
     dx = _deriv(_state(), dist=disturbances(cfg))
     assert np.allclose(dx[S.VEL : S.VEL + 3], np.array([1.0, -2.0, 0.5]) / PP.mass, atol=1e-12)
 
 
 def test_gust_is_one_minus_cosine():
-    cfg = load_config(overrides={"disturbance.gusts": [{"t": 2.0, "duration": 2.0, "force": [2.0, 0.0, 0.0]}]})
+    cfg = load_config("hilms-ideal", overrides={"disturbance.gusts": [{"t": 2.0, "duration": 2.0, "force": [2.0, 0.0, 0.0]}]})
     d = disturbances(cfg)
     assert _deriv(_state(), t=3.0, dist=d)[S.VEL] == pytest.approx(2.0 / PP.mass)
     assert _deriv(_state(), t=1.9, dist=d)[S.VEL] == 0.0
@@ -155,7 +155,7 @@ def test_vehicle_with_stopped_motors_rests_on_the_ground():
     """Issue 9 Reading: on the virtual ground without thrust (disarmed, failsafe) no sliding on."""
     from rig_emulator.physics.integrator import apply_ground
 
-    pp = physics_params(load_config())
+    pp = physics_params(load_config("hilms-ideal"))
     x = _state()
     x[S.POS + 2] = -0.01
     x[S.VEL : S.VEL + 3] = [2.0, -1.0, -3.0]

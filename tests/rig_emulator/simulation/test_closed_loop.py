@@ -1,13 +1,17 @@
 """Closed-loop runs of the scenarios: tracking, switching, determinism, bad config."""
 
+import functools
 import math
 
 import numpy as np
 import pytest
 
 from protocol.mean_error import PAPER_TABLE_6
-from rig_emulator.api import simulate
+from rig_emulator.api import simulate as _simulate
 from rig_emulator.config.loader import ConfigError
+
+# issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
+simulate = functools.partial(_simulate, airframe="hilms-ideal")
 
 
 @pytest.mark.parametrize("strategy", ["smc-flc", "flc"])

@@ -4,13 +4,17 @@ Each run injects its fault at t = 5 s through ``faults.events``; the bounds are 
 figures of docs/FAULTS.md (scripts/measure_faults.py, seeds 0-2) with a margin.
 """
 
+import functools
 import numpy as np
 import pytest
 
-from rig_emulator.api import simulate
+from rig_emulator.api import simulate as _simulate
 from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_ESTIMATE, ALERT_RATE
 from rig_emulator.simulation.run import Simulation
+
+# issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
+simulate = functools.partial(_simulate, airframe="hilms-ideal")
 
 T0 = 5.0
 

@@ -5,7 +5,7 @@ import struct
 import pytest
 
 from protocol.dialect import mavlink as M
-from rig_emulator.link.ftp import nak as ftp
+from rig_emulator.link.ftp import server as ftp
 from rig_emulator.testing.rig import NAN, command, recv
 
 ACCEPTED, DENIED, UNSUPPORTED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED
@@ -13,7 +13,7 @@ ACCEPTED, DENIED, UNSUPPORTED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MA
 
 def test_unknown_commands_are_unsupported(client):
     assert command(client, 31999).result == UNSUPPORTED
-    assert command(client, M.MAV_CMD_NAV_TAKEOFF).result == UNSUPPORTED
+    assert command(client, M.MAV_CMD_DO_ORBIT).result == UNSUPPORTED
     # a barometer calibration has no barometer to calibrate
     assert command(client, M.MAV_CMD_PREFLIGHT_CALIBRATION, 0, 0, 1, 0, 0, 0, 0).result == UNSUPPORTED
 

@@ -26,7 +26,7 @@ def _wp(seq, x, y, z, frame=LOCAL, **kw):
 MISSION_A = [
     _wp(0, 0.0, 0.0, 1.0, current=1),
     MissionItem(seq=1, frame=M.MAV_FRAME_MISSION, command=M.MAV_CMD_DO_CHANGE_SPEED, param1=1.0, param2=1.5, param3=-1.0),
-    _wp(1 + 1, 1.25, -0.5, 1.0, frame=M.MAV_FRAME_LOCAL_NED, param1=0.5, param2=0.25),
+    _wp(1 + 1, 1.25, -0.5, -1.0, frame=M.MAV_FRAME_LOCAL_NED, param1=0.5, param2=0.25),  # 1 m up (NED z down)
     _wp(3, 35.7000123, 51.4000456, 2.5, frame=REL),
     MissionItem(seq=4, frame=M.MAV_FRAME_GLOBAL_INT, command=M.MAV_CMD_NAV_LAND, x=0.0, y=0.0, z=0.0),
 ]
@@ -225,7 +225,12 @@ def test_set_current_by_message_and_command(conn):
     assert recv(conn, "MISSION_CURRENT", 5, lambda m: m.seq == 2) is not None
     assert command(conn, M.MAV_CMD_DO_SET_MISSION_CURRENT, 99).result == M.MAV_RESULT_DENIED
     assert command(conn, M.MAV_CMD_MISSION_START, 0, 0).result == M.MAV_RESULT_DENIED  # disarmed
-    assert command(conn, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, 4).result == M.MAV_RESULT_DENIED
+    # PX4 (and QGroundControl's "start mission"): AUTO.MISSION is taken disarmed, the mission flies on arming
+    assert command(conn, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, 4).result == M.MAV_RESULT_ACCEPTED
+    assert recv(conn, "MISSION_CURRENT", 5, lambda m: m.mission_state == M.MISSION_STATE_NOT_STARTED) is not None
+    assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
+    cur = recv(conn, "MISSION_CURRENT", 5, lambda m: m.mission_state == M.MISSION_STATE_ACTIVE)
+    assert cur is not None and cur.seq == 2
 
 
 def test_item0_home_parameter(rig, conn):

@@ -48,7 +48,8 @@ def test_set_accepted_and_rejected(rig, client):
 
 def _fly_north(strategy_index: float | None) -> list[tuple[float, float]]:
     """Arm, ask for 1 m north, and record (t, north) for 4 simulated seconds."""
-    with RigThread(speedup=4.0) as rig:
+    # one set-point, not a stream: a set-point timeout longer than the flight (PX4's 1 s default would hold)
+    with RigThread(speedup=4.0, overrides={"offboard.loss_timeout": 30.0}) as rig:
         c = connect(rig.tcp_url)
         if strategy_index is not None:
             c.mav.param_set_send(1, 1, b"CTL_STRATEGY", strategy_index, M.MAV_PARAM_TYPE_REAL32)

@@ -1,5 +1,7 @@
 """Telemetry streams at their configured rates, counted against their own simulated-time stamps."""
 
+import time
+
 from protocol.dialect import mavlink as M
 from rig_emulator.link.telemetry.stream_table import STREAMS
 from rig_emulator.testing.rig import collect, command, count_in_window, recv, stamp_s
@@ -28,12 +30,20 @@ def test_default_streams_at_their_rates(client):
 
 
 def test_heartbeat_is_one_hertz_of_wall_time(client):
-    """At 4x speed-up, one HEARTBEAT per 4 simulated seconds (HEARTBEAT carries no stamp)."""
-    got = collect(client, sim_seconds=12.0)
-    beats = len(got["HEARTBEAT"])
-    assert 2 <= beats <= 5, beats
-    hb = got["HEARTBEAT"][-1]
-    assert (hb.type, hb.autopilot) == (M.MAV_TYPE_QUADROTOR, M.MAV_AUTOPILOT_GENERIC)
+    """At 4x speed-up still one HEARTBEAT per wall-clock second (it carries no stamp): the gaps
+    between arrivals, measured here, not the simulated time they span (which shrinks when a
+    busy machine slows the rig down)."""
+    arrivals = []
+    deadline = time.monotonic() + 30.0
+    while len(arrivals) < 6 and time.monotonic() < deadline:
+        hb = recv(client, "HEARTBEAT", timeout=5.0)
+        if hb is not None:
+            arrivals.append(time.monotonic())
+            last = hb
+    gaps = sorted(b - a for a, b in zip(arrivals, arrivals[1:]))
+    assert len(gaps) == 5 and 0.75 <= gaps[2] <= 1.3, gaps  # the median gap
+    hb = last
+    assert (hb.type, hb.autopilot) == (M.MAV_TYPE_QUADROTOR, M.MAV_AUTOPILOT_PX4)
     assert hb.get_srcSystem() == 1 and hb.get_srcComponent() == M.MAV_COMP_ID_AUTOPILOT1
     assert hb.base_mode & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and not hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED
     assert hb.custom_mode == 3 << 16  # PX4 POSCTL: holding the initial position

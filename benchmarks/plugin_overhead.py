@@ -1,0 +1,116 @@
+"""What the controller plug-in machinery costs a run without a plug-in: an A/B of two source trees.
+
+``python -m benchmarks.plugin_overhead [--base COMMIT] [--this COMMIT] [--repeat N] [--duration S]``
+exports ``--base`` (default: the commit before the plug-in machinery, 3f19de9) and ``--this``
+(default ``HEAD``) with ``git archive`` into a temporary directory and runs, alternately in
+fresh processes, the same probe on the two trees (``PYTHONPATH`` selects the tree; each tree
+gets its own numba cache directory, empty at the start, so repetition 1 of each is a cold
+compile):
+
+* **cold compile**: wall time of the first ``simulate("helix", "smc-flc", 0.01 s)`` in a
+  process whose cache is empty (import excluded) - the issue allows the plug-in machinery
+  10 % more;
+* **warm start**: the same in later repetitions (cache load);
+* **steady state**: the real-time factor of ``simulate("helix", strategy, duration)`` for the
+  four built-in strategies (median of three calls) - the issue asks for no cost.
+
+Ratios are this tree over the base, per repetition (the two run back to back), median over
+repetitions. Wall-clock figures on a loaded machine are noisy: quote them with the load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tarfile
+import tempfile
+from pathlib import Path
+
+BASE = "3f19de9"
+STRATEGIES = ("smc-flc", "flc", "smc", "pid")
+
+_PROBE = r"""
+import json, sys, time
+t0 = time.perf_counter()
+from rig_emulator.api import simulate
+import rig_emulator
+t1 = time.perf_counter()
+simulate("helix", strategy="smc-flc", duration=0.01, seed=0)
+first = time.perf_counter() - t1
+out = {"tree": rig_emulator.__file__, "import_s": t1 - t0, "first_call_s": first}
+for s in sys.argv[2].split(","):
+    rtfs = []
+    for _ in range(3):
+        r = simulate("helix", strategy=s, duration=float(sys.argv[1]), seed=0)
+        rtfs.append(r.sim_time_s / r.wall_time_s)
+    rtfs.sort()
+    out["rtf." + s] = rtfs[1]
+print(json.dumps(out))
+"""
+
+
+def _export(commit: str, repo: Path, dest: Path) -> Path:
+    dest.mkdir()
+    tar = dest / "tree.tar"
+    with open(tar, "wb") as f:
+        subprocess.run(["git", "-C", str(repo), "archive", commit], stdout=f, check=True)
+    tree = dest / "tree"
+    tree.mkdir()
+    with tarfile.open(tar) as t:
+        t.extractall(tree, filter="data")
+    return tree
+
+
+def _run(tree: Path, cache: Path, duration: float) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree), HILMS_NUMBA_CACHE=str(cache), NUMBA_CACHE_DIR=str(cache))
+    p = subprocess.run([sys.executable, "-c", _PROBE, str(duration), ",".join(STRATEGIES)], env=env, cwd=tree,
+                       capture_output=True, text=True, check=False)
+    if p.returncode != 0:
+        raise RuntimeError(f"probe on {tree} failed:\n{p.stderr[-2000:]}")
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.plugin_overhead", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--base", default=BASE, help="the commit to compare with (default %(default)s)")
+    ap.add_argument("--this", default="HEAD", help="the commit measured (default %(default)s)")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--duration", type=float, default=20.0, help="simulated s per steady-state call")
+    ap.add_argument("--out", help="write the raw runs as JSON")
+    args = ap.parse_args(argv)
+    repo = Path(__file__).resolve().parent.parent
+    runs = {"base": [], "this": []}
+    with tempfile.TemporaryDirectory(prefix="hilms-ab-") as tmp:
+        tmp = Path(tmp)
+        trees = {"base": _export(args.base, repo, tmp / "base"), "this": _export(args.this, repo, tmp / "this")}
+        for rep in range(args.repeat):
+            for name in (("base", "this") if rep % 2 == 0 else ("this", "base")):
+                r = _run(trees[name], tmp / f"cache-{name}", args.duration)
+                runs[name].append(r)
+                print(f"rep {rep + 1} {name}: " + ", ".join(f"{k} {v:.3g}" for k, v in r.items() if k != "tree"),
+                      file=sys.stderr, flush=True)
+    with open("/proc/loadavg") if os.path.exists("/proc/loadavg") else open(os.devnull) as f:
+        load = f.read().strip()
+    print(f"A/B: {args.this} vs {args.base}, {args.repeat} repetitions, load average {load}")
+    cold = runs["this"][0]["first_call_s"] / runs["base"][0]["first_call_s"]
+    print(f"cold compile + first call: {runs['this'][0]['first_call_s']:.1f} s vs {runs['base'][0]['first_call_s']:.1f} s"
+          f" (ratio {cold:.3f}; target <= 1.10)")
+    if args.repeat > 1:
+        warm = [t["first_call_s"] / b["first_call_s"] for t, b in zip(runs["this"][1:], runs["base"][1:])]
+        print(f"warm start (cache load) ratio: median {statistics.median(warm):.3f}")
+    for s in STRATEGIES:
+        ratios = [t[f"rtf.{s}"] / b[f"rtf.{s}"] for t, b in zip(runs["this"], runs["base"])]
+        print(f"{s}: real-time factor {statistics.median(t[f'rtf.{s}'] for t in runs['this']):.0f}x vs "
+              f"{statistics.median(b[f'rtf.{s}'] for b in runs['base']):.0f}x, ratio median "
+              f"{statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
+    if args.out:
+        Path(args.out).write_text(json.dumps(runs, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,224 @@
+"""The controller plug-in interface: what a user subclasses (docs/YOUR_CONTROLLER.md).
+
+Modelled on RotorPy's controller template (an object with ``update(t, state, flat_output)``
+returning motor speeds, thrust plus attitude or body rates), on this rig's terms: the
+controller sees what the onboard computer sees (:class:`~rig_emulator.controllers.observation.Observation`)
+and declares what it replaces and what it commands.
+
+Two kinds, one interface:
+
+* :class:`Controller` - plain Python. ``update(t, obs)`` returns four numbers (or a
+  :class:`Command`). The plant stays compiled; the loop calls back into Python at the
+  controller's rate.
+* :class:`CompiledController` - its ``kernel`` is a ``numba.njit`` function
+  ``kernel(t, obs, params, state, out) -> int`` on float64 arrays (layout:
+  :mod:`rig_emulator.control.plugin_layout`); it runs inside the compiled loop. The same
+  kernel also runs as plain Python (``python=True`` when loading), e.g. to debug it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+
+from rig_emulator.control import plugin_layout as PL
+
+#: what a controller replaces -> loop mode
+REPLACES = {"both": PL.P_BOTH, "attitude": PL.P_ATTITUDE, "position": PL.P_POSITION}
+#: what it commands -> kind, with the unit of the four numbers
+COMMANDS = {
+    "motor_voltages": (PL.K_VOLTAGES, "motor voltages 1-4 (V)"),
+    "motor_thrusts": (PL.K_THRUSTS, "motor thrusts 1-4 (N)"),
+    "torques": (PL.K_TORQUES, "u1 (N) and body torques u2, u3, u4 (N m, FRD)"),
+    "attitude": (PL.K_ATTITUDE, "u1 (N) and desired phi, theta, psi (rad)"),
+}
+#: which commands go with which replacement
+ALLOWED = {
+    "both": ("motor_voltages", "motor_thrusts", "torques"),
+    "attitude": ("motor_voltages", "motor_thrusts", "torques"),
+    "position": ("attitude",),
+}
+
+
+class PluginError(RuntimeError):
+    """A controller plug-in could not be loaded, or failed while flying.
+
+    ``plugin`` names it (``module:Name``), ``time_s`` is the simulated time of the failure
+    (None when loading), ``problem`` says what went wrong.
+    """
+
+    def __init__(self, plugin: str, problem: str, time_s: float | None = None):
+        super().__init__(plugin, problem, time_s)
+        self.plugin = plugin
+        self.problem = problem
+        self.time_s = time_s
+
+    def __str__(self) -> str:
+        when = "" if self.time_s is None else f" at t = {self.time_s:.3f} s"
+        return f"controller {self.plugin}{when}: {self.problem}"
+
+
+#: What ``update`` may return instead of four bare numbers: the command and, optionally, the
+#: attitude it aims at (rad, rad/s; shown in logs and telemetry, used by the loss-of-control
+#: supervisor).
+Command = namedtuple("Command", "values attitude_des attitude_rate_des", defaults=(None, None))
+
+
+class ControllerParams:
+    """A controller's own parameters: named floats or fixed-length float vectors in one flat
+    float64 array (``array``, what a compiled kernel receives as ``params``).
+
+    ``params.kp`` reads the current value (a float, or a read-only view for vectors); a
+    served rig changes the array in place when a ground station sets ``<prefix><NAME><i>``.
+    """
+
+    def __init__(self, defaults: dict, values: dict | None = None, owner: str = "controller"):
+        self._slices: dict[str, slice] = {}
+        flat: list[float] = []
+        for name, default in defaults.items():
+            if not name.isidentifier():
+                raise PluginError(owner, f"parameter name {name!r} is not an identifier")
+            v = np.atleast_1d(np.asarray(default, dtype=np.float64)).ravel()
+            self._slices[name] = slice(len(flat), len(flat) + v.size) if np.ndim(default) else slice(len(flat), len(flat) + 1)
+            flat.extend(float(a) for a in v)
+        self._scalar = {n: np.ndim(d) == 0 for n, d in defaults.items()}
+        self.array = np.ascontiguousarray(flat if flat else [0.0], dtype=np.float64)
+        self.owner = owner
+        for name, value in (values or {}).items():
+            self.set(name, value)
+
+    def names(self):
+        return tuple(self._slices)
+
+    def index(self, name: str) -> slice:
+        """Where parameter ``name`` lives in :attr:`array` (for compiled kernels)."""
+        return self._slices[name]
+
+    def set(self, name: str, value) -> None:
+        """Set one parameter (a number, or as many numbers as its default has); validated."""
+        if name not in self._slices:
+            raise PluginError(self.owner, f"unknown parameter {name!r}; it has {', '.join(self._slices) or 'none'}")
+        sl = self._slices[name]
+        v = np.atleast_1d(np.asarray(value, dtype=np.float64)).ravel()
+        if v.size != sl.stop - sl.start:
+            raise PluginError(self.owner, f"parameter {name!r}: expected {sl.stop - sl.start} value(s), got {v.size}")
+        if not np.all(np.isfinite(v)):
+            raise PluginError(self.owner, f"parameter {name!r}: values must be finite, got {value!r}")
+        self.array[sl] = v
+
+    def __getattr__(self, name):
+        slices = self.__dict__.get("_slices", {})
+        if name in slices:
+            sl = slices[name]
+            if self._scalar[name]:
+                return float(self.array[sl.start])
+            view = self.array[sl]
+            view.flags.writeable = False
+            return view
+        raise AttributeError(name)
+
+    def as_dict(self) -> dict:
+        return {n: (float(self.array[s.start]) if self._scalar[n] else self.array[s].tolist())
+                for n, s in self._slices.items()}
+
+
+class Controller:
+    """Base class of a controller plug-in. Subclass it and override :meth:`update`.
+
+    Class attributes (the declaration, checked when the rig loads it):
+
+    * ``replaces``: ``"both"`` (position and attitude loops), ``"attitude"`` (the rig's
+      position loop of the configured strategy feeds it ``obs.attitude_target`` and
+      ``obs.thrust_target``) or ``"position"`` (it commands an attitude, the rig's attitude
+      loop of the configured strategy does the rest);
+    * ``commands``: ``"motor_voltages"``, ``"motor_thrusts"``, ``"torques"`` (u1 and body
+      torques; the rig's allocation does the rest) or ``"attitude"`` (u1 and the desired
+      Euler angles; only with ``replaces = "position"``);
+    * ``rate_hz``: how often ``update`` runs (None: the rig's ``sim.control_rate_hz``); a
+      whole divisor of the physics rate. A position-only controller may run slower than the
+      rig's attitude loop (a whole multiple of its period); the others set the period of
+      the whole onboard loop (guidance, Eq. 1, supervisor);
+    * ``raw_sensors``: True to receive the raw IMU and load-cell samples (``obs.imu_raw``,
+      ``obs.cell_raw``);
+    * ``params``: the defaults of its own parameters (name -> number or list of numbers);
+      set from the config (``[controller.params]``) or, served, as MAVLink parameters
+      ``<param_prefix><NAME><i>``;
+    * ``param_prefix``: that prefix (upper case, ends with ``_``; empty: not served).
+
+    :meth:`reset` runs on arming, before the first :meth:`update`. Keep state on ``self``.
+    """
+
+    replaces = "both"
+    commands = "torques"
+    rate_hz: float | None = None
+    raw_sensors = False
+    params: dict = {}
+    param_prefix = ""
+
+    def __init__(self, **params):
+        self.params = ControllerParams(type(self).params, params, owner=type(self).__qualname__)
+
+    def reset(self) -> None:
+        """Forget everything learnt in a previous flight (called on arming)."""
+
+    def update(self, t: float, obs):
+        """Return the command for time ``t``: four numbers (see ``commands``) or a :class:`Command`."""
+        raise NotImplementedError
+
+
+class CompiledController(Controller):
+    """A controller whose law is a ``numba.njit`` kernel run inside the compiled step loop.
+
+    ``kernel(t, obs, params, state, out) -> int``: ``obs`` (read it with the ``O_*``
+    constants of :mod:`rig_emulator.control.plugin_layout`), ``params`` (this controller's
+    ``params.array``), ``state`` (``state_size`` floats of its own, zeroed on arming, when
+    ``obs[O_RESET]`` is 1), ``out`` (write the command at ``C_CMD``, optionally the attitude
+    aimed at at ``C_ATT_DES``/``C_ATT_RATE_DES``). Return 0, or a non-zero code of your own
+    to report a failure (the rig stops the run or goes to its failsafe and shows the code).
+    """
+
+    kernel = None
+    state_size = 0
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.state = np.zeros(max(1, int(self.state_size)))
+
+    def update(self, t, obs):
+        """The kernel run as plain Python (numba's ``py_func``, and so are the compiled helpers it
+        calls), for the Python call path."""
+        out = np.full(PL.OUT_SIZE, math.nan)
+        rc = _as_python(type(self).kernel)(t, obs.array, self.params.array, self.state, out)
+        if rc:
+            raise RuntimeError(f"kernel returned error code {int(rc)}")
+        return Command(out[PL.C_CMD:PL.C_CMD + 4], out[PL.C_ATT_DES:PL.C_ATT_DES + 3],
+                       out[PL.C_ATT_RATE_DES:PL.C_ATT_RATE_DES + 3])
+
+    def reset(self) -> None:
+        self.state[:] = 0.0
+
+
+_PYTHON: dict = {}  # numba dispatcher -> its plain-Python function calling plain-Python helpers
+
+
+def _as_python(dispatcher):
+    """``dispatcher.py_func`` with every numba function it refers to (its globals and closure,
+    recursively) replaced by that function's own plain-Python version."""
+    fn = _PYTHON.get(dispatcher)
+    if fn is not None:
+        return fn
+    import types
+
+    from numba.core.registry import CPUDispatcher
+
+    py = dispatcher.py_func
+    glb = dict(py.__globals__)
+    fn = types.FunctionType(py.__code__, glb, py.__name__, py.__defaults__, py.__closure__)
+    _PYTHON[dispatcher] = fn  # before recursing: a kernel may call itself
+    for name in py.__code__.co_names:
+        value = glb.get(name)
+        if isinstance(value, CPUDispatcher):
+            glb[name] = _as_python(value)
+    return fn

@@ -1,0 +1,106 @@
+"""What a Python controller plug-in sees: named read-only views on the loop's observation array.
+
+The numbers are those of :mod:`rig_emulator.control.plugin_layout` (SI, world ENU, body FRD,
+paper Euler angles). The views are created once and the loop rewrites the numbers in
+place before every call: copy what you want to keep (``obs.position.copy()``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rig_emulator.control import plugin_layout as PL
+from rig_emulator.control.controller import (
+    REF_ACC,
+    REF_ATT,
+    REF_ATT_ACC,
+    REF_ATT_RATE,
+    REF_POS,
+    REF_VEL,
+    REF_YAW,
+)
+
+
+class Reference:
+    """The guidance reference (Sec. 4-4, Eq. 44): position mode or attitude mode."""
+
+    def __init__(self, a: np.ndarray):
+        r = a[PL.O_REF:]
+        self._a = a
+        self.position = r[REF_POS:REF_POS + 3]
+        self.velocity = r[REF_VEL:REF_VEL + 3]
+        self.acceleration = r[REF_ACC:REF_ACC + 3]
+        self.attitude = r[REF_ATT:REF_ATT + 3]
+        self.attitude_rate = r[REF_ATT_RATE:REF_ATT_RATE + 3]
+        self.attitude_acc = r[REF_ATT_ACC:REF_ATT_ACC + 3]
+        self._yaw = PL.O_REF + REF_YAW
+
+    @property
+    def yaw(self) -> float:
+        """Desired yaw psi (rad), position mode."""
+        return float(self._a[self._yaw])
+
+
+class Observation:
+    """The onboard computer's view at a control instant (see the module docstring).
+
+    Attributes (numpy views, (3,) unless noted): ``euler``, ``euler_rates``, ``body_rates``
+    (estimates: complementary filter; the truth on ideal feedback), ``position``,
+    ``velocity`` (onboard Eq. 1), ``thrusts`` (4, filtered load cells, N), ``reference``
+    (:class:`Reference`), ``attitude_target``, ``attitude_rate_target``,
+    ``attitude_acc_target``, ``thrust_target`` (from the rig's position loop, for an
+    attitude-only controller), ``true_position``, ``true_velocity``, ``true_quaternion`` (4),
+    ``true_body_rates`` (ideal feedback only, else NaN: ``has_truth``), ``imu_raw`` (modules x
+    9 counts) and ``cell_raw`` (4 counts) when the controller asked for raw samples; the rig's
+    constants ``mass``, ``gravity``, ``inertia`` (3), ``arm_length``, ``km_over_kf``, ``kf``,
+    ``thrust_per_volt``, ``voltage_max``, ``thrust_max``, ``max_tilt``, ``ref_omega``;
+    ``array`` the whole flat array.
+    """
+
+    def __init__(self, array: np.ndarray, n_imu: int = 5):
+        a = array
+        self.array = a
+        self.euler = a[PL.O_EULER:PL.O_EULER + 3]
+        self.euler_rates = a[PL.O_EULER_RATE:PL.O_EULER_RATE + 3]
+        self.body_rates = a[PL.O_BODY_RATE:PL.O_BODY_RATE + 3]
+        self.position = a[PL.O_POS:PL.O_POS + 3]
+        self.velocity = a[PL.O_VEL:PL.O_VEL + 3]
+        self.thrusts = a[PL.O_THRUST:PL.O_THRUST + 4]
+        self.reference = Reference(a)
+        self.attitude_target = a[PL.O_ATT_TARGET:PL.O_ATT_TARGET + 3]
+        self.attitude_rate_target = a[PL.O_ATT_RATE_TARGET:PL.O_ATT_RATE_TARGET + 3]
+        self.attitude_acc_target = a[PL.O_ATT_ACC_TARGET:PL.O_ATT_ACC_TARGET + 3]
+        self.true_position = a[PL.O_TRUE:PL.O_TRUE + 3]
+        self.true_velocity = a[PL.O_TRUE + 3:PL.O_TRUE + 6]
+        self.true_quaternion = a[PL.O_TRUE + 6:PL.O_TRUE + 10]
+        self.true_body_rates = a[PL.O_TRUE + 10:PL.O_TRUE + 13]
+        self.imu_raw = a[PL.O_IMU_RAW:PL.O_IMU_RAW + 9 * n_imu].reshape(n_imu, 9)
+        self.cell_raw = a[PL.O_CELL_RAW:PL.O_CELL_RAW + 4]
+        self.inertia = a[PL.O_IXX:PL.O_IXX + 3]
+        for name in ("euler", "euler_rates", "body_rates", "position", "velocity", "thrusts", "attitude_target",
+                     "attitude_rate_target", "attitude_acc_target", "true_position", "true_velocity",
+                     "true_quaternion", "true_body_rates", "imu_raw", "cell_raw", "inertia"):
+            getattr(self, name).flags.writeable = False
+        for k, v in vars(self.reference).items():
+            if isinstance(v, np.ndarray) and k != "_a":  # the views only: the loop writes the array itself
+                v.flags.writeable = False
+
+    def _f(self, i: int) -> float:
+        return float(self.array[i])
+
+    t = property(lambda self: self._f(PL.O_T), doc="time (s)")
+    dt = property(lambda self: self._f(PL.O_DT), doc="the controller's period (s)")
+    reset = property(lambda self: self.array[PL.O_RESET] != 0.0, doc="first call after arming")
+    attitude_mode = property(lambda self: self.array[PL.O_MODE] != 0.0, doc="guidance gives attitude references")
+    thrust_target = property(lambda self: self._f(PL.O_THRUST_TARGET), doc="u1 from the rig's position loop (N)")
+    has_truth = property(lambda self: self.array[PL.O_TRUE_VALID] != 0.0, doc="true state present (ideal feedback)")
+    mass = property(lambda self: self._f(PL.O_MASS))
+    gravity = property(lambda self: self._f(PL.O_G))
+    arm_length = property(lambda self: self._f(PL.O_ARM))
+    km_over_kf = property(lambda self: self._f(PL.O_KM_KF))
+    kf = property(lambda self: self._f(PL.O_KF))
+    thrust_per_volt = property(lambda self: self._f(PL.O_K_V), doc="N per V (Eq. 40)")
+    voltage_max = property(lambda self: self._f(PL.O_V_MAX))
+    thrust_max = property(lambda self: self._f(PL.O_F_MAX), doc="per motor (N)")
+    max_tilt = property(lambda self: self._f(PL.O_MAX_TILT), doc="control.max_tilt_deg in rad")
+    ref_omega = property(lambda self: self._f(PL.O_REF_OMEGA), doc="reference-filter bandwidth 1/tau (rad/s)")

@@ -1,0 +1,92 @@
+"""The simulator's messages to the flight stack: one builder per message, from a
+:class:`~rig_emulator.simulation.hil_readout.HilReadout`.
+
+Frames: HIL_SENSOR's vectors are body FRD, which is the rig's body frame B, so they pass
+unchanged; positions and velocities are NED (``protocol.frames``) and geodetic about
+``home`` (``protocol.geodesy.TangentPlane``); the attitude quaternion is R_NED_FRD. Units: HIL_SENSOR
+m/s^2, rad/s, gauss, hPa, m, degC; HIL_GPS and HIL_STATE_QUATERNION degE7, mm, cm/s,
+centidegrees, milli-g (:mod:`rig_emulator.link.telemetry.units`,
+:mod:`rig_emulator.link.px4_simulator.hil_units`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from protocol.dialect import mavlink
+from protocol.frames import enu_to_ned_xyz, mavlink_quaternion_from_quat_wb
+from protocol.geodesy import TangentPlane
+from rig_emulator.link.telemetry import units as U
+from rig_emulator.link.px4_simulator import hil_units as H
+
+#: the virtual GPS (ideal, as the rig's GPS_RAW_INT): 3D fix, 10 satellites, 0.3 m accuracy
+GPS_SATELLITES = 10
+GPS_ACCURACY_M = 0.3
+GPS_SPEED_UNKNOWN_BELOW_M_S = 0.01  # course over ground reported unknown below this speed
+#: HIL_GPS.time_usec is UTC (PX4 copies it to sensor_gps.time_utc_usec). Reading: simulated
+#: time from a fixed epoch, so that runs stay bit-identical: 2024-07-01T00:00:00Z.
+GPS_EPOCH_UNIX_S = 1719792000.0
+GPS_EPOCH_USEC = int(GPS_EPOCH_UNIX_S) * 1_000_000
+
+
+def fields_updated(readout) -> int:
+    """HIL_SENSOR.fields_updated: the accelerometer and gyro bits when the IMU modules took
+    a sample during the step, the magnetometer bits when the magnetometers did, and the
+    barometer bits (absolute pressure, pressure altitude, temperature) every step. The rig
+    has no airspeed sensor: the differential-pressure bit is never set."""
+    bits = H.FIELDS_BARO
+    if readout.imu_sampled:
+        bits |= H.FIELDS_ACCEL | H.FIELDS_GYRO
+    if readout.mag_sampled:
+        bits |= H.FIELDS_MAG
+    return bits
+
+
+def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False):
+    """HIL_SENSOR: the IMU modules' ensemble, the magnetometers' and the virtual barometer.
+    ``all_fields`` flags every field (0x1FFF) whatever was sampled, as jMAVSim does."""
+    a, g, m = readout.accel, readout.gyro, readout.mag
+    return mavlink.MAVLink_hil_sensor_message(
+        time_usec=H.step_usec(readout.time_s),
+        xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
+        xgyro=float(g[0]), ygyro=float(g[1]), zgyro=float(g[2]),
+        xmag=U.gauss(float(m[0])), ymag=U.gauss(float(m[1])), zmag=U.gauss(float(m[2])),
+        abs_pressure=H.hpa(readout.pressure_pa), diff_pressure=0.0,
+        pressure_alt=float(readout.baro_altitude_m), temperature=float(readout.temperature_c),
+        fields_updated=H.FIELDS_ALL if all_fields else fields_updated(readout), id=sensor_id)
+
+
+def _geodetic(readout, plane: TangentPlane):
+    return plane.to_global(*(float(v) for v in readout.position))
+
+
+def hil_gps(readout, plane: TangentPlane):
+    """HIL_GPS: the virtual position about the home of ``plane`` (3D fix, ideal)."""
+    lat, lon, alt = _geodetic(readout, plane)
+    vn, ve, vd = enu_to_ned_xyz(*readout.velocity)
+    speed = math.hypot(vn, ve)
+    cog = U.heading_rad_to_cdeg(math.atan2(ve, vn)) if speed >= GPS_SPEED_UNKNOWN_BELOW_M_S else U.UINT16_UNKNOWN
+    accuracy_cm = H.cm_u16(GPS_ACCURACY_M)
+    return mavlink.MAVLink_hil_gps_message(
+        time_usec=GPS_EPOCH_USEC + H.step_usec(readout.time_s), fix_type=mavlink.GPS_FIX_TYPE_3D_FIX,
+        lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt), eph=accuracy_cm, epv=accuracy_cm,
+        vel=U.cm_s_u16(speed), vn=U.cm_s_i16(vn), ve=U.cm_s_i16(ve), vd=U.cm_s_i16(vd), cog=cog,
+        satellites_visible=GPS_SATELLITES, id=0, yaw=0)
+
+
+def hil_state_quaternion(readout, plane: TangentPlane):
+    """HIL_STATE_QUATERNION: the true attitude, body rates, virtual position, velocity and
+    acceleration (ground truth for the flight stack's log; the acceleration NED in milli-g
+    as common.xml gives the unit)."""
+    lat, lon, alt = _geodetic(readout, plane)
+    vn, ve, vd = enu_to_ned_xyz(*readout.velocity)
+    an, ae, ad = enu_to_ned_xyz(*readout.acceleration)
+    w, x, y, z = mavlink_quaternion_from_quat_wb(readout.quaternion)
+    p, q, r = (float(v) for v in readout.body_rates)
+    speed = math.sqrt(vn * vn + ve * ve + vd * vd)
+    return mavlink.MAVLink_hil_state_quaternion_message(
+        time_usec=H.step_usec(readout.time_s), attitude_quaternion=[w, x, y, z],
+        rollspeed=p, pitchspeed=q, yawspeed=r, lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt),
+        vx=U.cm_s_i16(vn), vy=U.cm_s_i16(ve), vz=U.cm_s_i16(vd),
+        ind_airspeed=U.cm_s_u16(speed), true_airspeed=U.cm_s_u16(speed),
+        xacc=U.milli_g(an), yacc=U.milli_g(ae), zacc=U.milli_g(ad))

@@ -1,0 +1,52 @@
+"""Units of the Simulator MAVLink API's messages: the one place this link scales numbers.
+
+The generic SI -> MAVLink conversions (mm, cm/s, deg * 1e7, gauss, milli-g, microseconds)
+are :mod:`rig_emulator.link.telemetry.units`; this module adds the few the HIL messages need
+on top, and the actuator mapping (HIL_ACTUATOR_CONTROLS -> motor voltage).
+"""
+
+from __future__ import annotations
+
+import math
+
+PA_PER_HPA = 100.0
+#: HIL_SENSOR.fields_updated bits (MAVLink common.xml HIL_SENSOR_UPDATED_FLAGS)
+FIELDS_ACCEL = 0x007  # xacc, yacc, zacc
+FIELDS_GYRO = 0x038  # xgyro, ygyro, zgyro
+FIELDS_MAG = 0x1C0  # xmag, ymag, zmag
+FIELD_ABS_PRESSURE = 0x200
+FIELD_DIFF_PRESSURE = 0x400
+FIELD_PRESSURE_ALT = 0x800
+FIELD_TEMPERATURE = 0x1000
+FIELDS_BARO = FIELD_ABS_PRESSURE | FIELD_PRESSURE_ALT | FIELD_TEMPERATURE
+FIELDS_ALL = 0x1FFF
+#: HIL_ACTUATOR_CONTROLS.mode bits (MAV_MODE_FLAG) and .flags bits (HIL_ACTUATOR_CONTROLS_FLAGS)
+MODE_FLAG_SAFETY_ARMED = 128
+FLAG_LOCKSTEP = 1
+
+
+def step_usec(t_s: float) -> int:
+    """Simulated seconds (a whole number of physics steps, k dt) -> microseconds, rounded:
+    consecutive 4 ms steps stay exactly 4000 us apart (truncating 0.007 s would give 6999)."""
+    return int(round(t_s * 1e6))
+
+
+def hpa(pressure_pa: float) -> float:
+    """Pascal -> hectopascal (HIL_SENSOR.abs_pressure, diff_pressure)."""
+    return pressure_pa / PA_PER_HPA
+
+
+def cm_u16(length_m: float) -> int:
+    """Metres -> centimetres in a uint16 (HIL_GPS.eph/epv; 65535 = unknown)."""
+    if not math.isfinite(length_m):
+        return 65535
+    return int(min(max(round(length_m * 100.0), 0), 65534))
+
+
+def motor_voltage(control: float, voltage_max_v: float) -> float:
+    """One HIL_ACTUATOR_CONTROLS.controls entry (a motor output, 0 = stopped, 1 = full) ->
+    the motor driver's voltage command: ``control * voltage_max`` clipped to 0..voltage_max
+    (Eq. 40 makes thrust linear in it: PX4's THR_MDL_FAC = 0). NaN stops the motor."""
+    if not math.isfinite(control):
+        return 0.0
+    return min(max(control, 0.0), 1.0) * voltage_max_v

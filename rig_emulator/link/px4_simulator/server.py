@@ -1,0 +1,131 @@
+"""``rig-emulator serve --px4-simulator ...``: the rig as the simulator of a flight stack,
+with the ground link still served.
+
+One loop, one thread: it waits (``select``) on the flight stack's stream, the listening
+socket and the ground link's sockets. The flight stack's messages step the plant
+(:mod:`rig_emulator.link.px4_simulator.session`); the ground link
+(:class:`~rig_emulator.link.server.RigServer`: HEARTBEAT, the rig's own telemetry and load
+cells, parameters, commands) is serviced between steps at most every
+``GROUND_PERIOD_S`` of wall-clock time, or at once when a ground station sent something.
+Its streams are scheduled in simulated time as always; a plant stepped at 10x real time
+thins them to one message per service (as ``--speedup max`` does).
+
+The rig's own controllers do not run in this mode: the flight stack drives the motors.
+"""
+
+from __future__ import annotations
+
+import math
+import select
+import time
+
+from rig_emulator.link.px4_simulator.session import SimulatorSession
+
+GROUND_PERIOD_S = 0.01
+
+
+class Px4SimulatorServer:
+    def __init__(self, ground, transport, plant, home, speedup: float = 1.0, all_fields: bool = False, log=print):
+        self.ground = ground
+        self.transport = transport
+        self.plant = plant
+        self.home = home
+        self.speedup = speedup
+        self.all_fields = all_fields
+        self._log = log
+        self.session: SimulatorSession | None = None
+        self.sessions = 0
+        self.session_steps: list[int] = []  # steps of every finished session
+        self._stop = False
+        self._next_ground = 0.0
+
+    def stop(self) -> None:
+        """Ask the loop to finish (safe from a signal handler)."""
+        self._stop = True
+
+    # --- sessions -------------------------------------------------------------------------
+    def _start_session(self, conn) -> None:
+        self.sessions += 1
+        self.session = SimulatorSession(conn, self.plant, self.home, speedup=self.speedup,
+                                        all_fields=self.all_fields, counters=self.ground.counters, log=self._log)
+        self._log(f"flight stack connected ({conn.name}); the plant starts afresh")
+
+    def _end_session(self) -> None:
+        s = self.session
+        self.session = None
+        s.close()
+        self.session_steps.append(s.steps)
+        self._log(f"flight stack gone ({s.conn.name}) at t = {self.plant.time_s:.3f} s after {s.steps} steps "
+                  f"({s.actuator_messages} actuator messages); motors off, waiting for the next one")
+
+    # --- the ground link ------------------------------------------------------------------
+    def _service_ground(self, now: float) -> None:
+        g = self.ground
+        self._next_ground = now + GROUND_PERIOD_S
+        g._snap = None  # the plant moved since: the ground link's cached snapshot is stale
+        g._heartbeat_if_due(now)
+        g.service_io()
+        g.report_faults()
+        g.emit_streams()
+        for ep in g.endpoints:
+            ep.flush()
+
+    def _ground_sockets(self) -> list:
+        return [s for ep in self.ground.endpoints for s in ep.filenos()]
+
+    # --- the loop ---------------------------------------------------------------------------
+    def run(self, duration: float | None = None) -> None:
+        """Serve until :meth:`stop`, or until a session has run ``duration`` simulated seconds."""
+        t_end = math.inf if duration is None else duration - 0.5 * self.plant.period_s
+        self._next_ground = time.monotonic()
+        listening = self.transport.filenos()
+        while not self._stop:
+            now = time.monotonic()
+            if now >= self._next_ground:
+                self._service_ground(now)
+            s = self.session
+            if s is not None:
+                for _ in range(s.free_run_due(now)):
+                    s.step()
+                if not s.conn.open:
+                    self._end_session()
+                    continue
+            elif not listening:  # a serial line: open it (again) when it can be
+                self._accept()
+            if self.session is not None and self.plant.time_s >= t_end:
+                break
+            s = self.session
+            ground = self._ground_sockets()
+            fds = ground + listening + ([s.conn] if s is not None else [])
+            timeout = max(self._next_ground - now, 0.0)
+            if s is not None:
+                free = s.next_free_run_in(now)
+                if free is not None:
+                    timeout = min(timeout, free)
+            elif not listening:
+                timeout = min(timeout, 0.05)
+            readable = select.select(fds, [], [], timeout)[0]
+            if not readable:
+                continue
+            # the session first: a flight stack that closed and reconnected at once is over before the new one
+            if s is not None and s.conn in readable and not s.on_readable():
+                self._end_session()
+            if listening and listening[0] in readable:
+                self._accept()
+            if any(sock in readable for sock in ground):
+                self._service_ground(time.monotonic())
+        if self.session is not None:
+            self._end_session()
+
+    def _accept(self) -> None:
+        s = self.session
+        if s is not None and select.select([s.conn], [], [], 0)[0] and not s.on_readable():
+            self._end_session()  # the flight stack that is calling again has closed its old connection
+        conn = self.transport.accept(busy=self.session is not None)
+        if conn is not None:
+            self._start_session(conn)
+
+    def close(self) -> None:
+        if self.session is not None:
+            self._end_session()
+        self.transport.close()

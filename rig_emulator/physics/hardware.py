@@ -1,0 +1,272 @@
+"""The real rig's departures from the ideal plant (issue 13): one named function per effect.
+
+Every effect has a neutral value that leaves the ideal plant of Eq. 1-3 and Eq. 40 exactly
+as it was (the ``hilms-ideal`` airframe uses only neutral values, bit for bit); the
+``hilms`` airframe selects ``presets/hardware/hilms.toml`` with values a real rig of this
+build plausibly has. Parameters come in :class:`HardwareParams` (``PhysicsParams.hw``),
+state in its arrays (allocated once; nothing here allocates). Where each acts:
+
+==============================  =====================================  ==========================================
+effect (function)               acts on                                parameters (config keys)
+==============================  =====================================  ==========================================
+:func:`joint_friction_torque`   Eq. 3, body torque                     ``joint.viscous``, ``joint.coulomb``,
+                                                                       ``joint.coulomb_smoothing``
+:func:`cog_gravity_torque`      Eq. 3, body torque                     ``joint.cog_offset``
+:func:`motor_thrust`            Eq. 40, each motor's true thrust       ``motors.thrust_gain``,
+                                (physics, load cells, logs)            ``motors.thrust_bias_grf``,
+                                                                       ``motors.curve_exponent``,
+                                                                       ``motors.curve_pivot_grf``
+:func:`actuator_chain`          voltage command -> motor (each step)   ``control.actuation_delay``,
+                                                                       ``motors.command_steps``,
+                                                                       ``motors.esc_deadband_v``
+:func:`torque_noise_step`       Eq. 3, body torque held over a step    ``disturbance.torque_noise``,
+                                                                       ``disturbance.torque_noise_corner_hz``
+:func:`frame_vibration_step`    IMU gyro and accelerometer inputs,     ``vibration.gyro_amplitude``,
+                                the same on all five modules           ``vibration.accel_amplitude``,
+                                                                       ``vibration.blades``
+==============================  =====================================  ==========================================
+
+Model mismatch (``controller_model.*``) and the position FLC's rate input
+(``flc.position_rate_share``) are controller-side: :mod:`rig_emulator.simulation.params`.
+Sources of the magnitudes are given per function and in docs/REPRODUCTION.md.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+
+from rig_emulator._jit import jit
+
+HardwareParams = namedtuple(
+    "HardwareParams",
+    [
+        "friction",        # bool: any joint friction
+        "visc",            # (3,) viscous joint friction per body axis, N m s/rad
+        "coul",            # (3,) Coulomb joint friction per body axis, N m
+        "coul_rate",       # rate below which the Coulomb term is smoothed (tanh), rad/s
+        "cog_on",          # bool
+        "cog_moment",      # (3,) m_rig * r_cg in B (FRD), kg m: gravity torque = r_cg x (m g_B)
+        "gain",            # (4,) per-motor thrust gain x common thrust-chain gain
+        "bias",            # common additive thrust bias of a running motor, N
+        "curve_n",         # exponent of the true motor curve (1: Eq. 40)
+        "curve_vp",        # pivot voltage where the true curve meets Eq. 40, V
+        "curve_fp",        # pivot thrust, N
+        "act_on",          # bool: delay, quantisation or dead-band present
+        "delay_steps",     # int: sensing-to-actuation delay in physics steps
+        "cmd_buf",         # (delay_steps + 1, 4) ring buffer of voltage commands
+        "cmd_out",         # (4,) the voltages the motors receive this step
+        "quantum",         # ESC command quantum, V (0: continuous)
+        "deadband",        # ESC dead-band, V (commands below give 0 V)
+        "noise_on",        # bool
+        "noise_sigma",     # (3,) std of the coloured body torque, N m
+        "noise_a",         # first-order filter pole per physics step, exp(-2 pi fc dt)
+        "noise_b",         # sqrt(1 - a^2): keeps the filtered std at sigma
+        "noise_torque",    # (3,) the torque held over the current step, N m (state)
+        "rng",             # (1,) uint64 splitmix64 state, seeded from sim.seed
+        "vib_on",          # bool
+        "vib_gyro",        # (3,) per-rotor gyro vibration amplitude at hover rotor speed, rad/s
+        "vib_acc",         # (3,) per-rotor accelerometer vibration amplitude at hover rotor speed, m/s^2
+        "vib_blades",      # blades per rotor (the blade-pass frequency is blades x rotor speed)
+        "vib_omega_ref",   # hover rotor speed, rad/s (amplitudes scale with (Omega / this)^2)
+        "vib_phase",       # (4,) blade-pass phase of each rotor, rad (state)
+    ],
+)
+
+
+def neutral_arrays():
+    """State arrays of a plant with no effects (shape-compatible with any HardwareParams)."""
+    return dict(cmd_buf=np.zeros((1, 4)), cmd_out=np.zeros(4), noise_torque=np.zeros(3),
+                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4))
+
+
+# --- joint --------------------------------------------------------------------------------
+
+
+@jit(inline="always")
+def joint_friction_torque(wx, wy, wz, hw):
+    """Friction torque of the spherical joint on the body (B), added to Eq. 3's torques.
+
+    Per body axis ``-c_v w - c_c tanh(w / w_s)``: viscous plus Coulomb friction, the
+    Coulomb step smoothed over ``w_s`` (``joint.coulomb_smoothing``) so that RK4 sees a
+    continuous right-hand side and a rig at rest stays at rest. Magnitude: a greased ball
+    joint of this size (about 20 mm ball, 2.2 kg on it) has a breakaway torque of the
+    order of 0.01-0.05 N m; the viscous part (cable drag, grease) 0.005-0.05 N m s/rad.
+    Source: the rig's Fig. 12 responses settle without limit cycles (RIG-SPEC), and a
+    failsafe trip must be recoverable (issue 13): without friction a disarmed rig spins
+    for ever.
+    """
+    if not hw.friction:
+        return 0.0, 0.0, 0.0
+    v = hw.visc
+    c = hw.coul
+    s = hw.coul_rate
+    return (-v[0] * wx - c[0] * math.tanh(wx / s),
+            -v[1] * wy - c[1] * math.tanh(wy / s),
+            -v[2] * wz - c[2] * math.tanh(wz / s))
+
+
+@jit(inline="always")
+def cog_gravity_torque(R, hw, g):
+    """Gravity torque of the rig's centre of gravity away from the pivot (B), Eq. 3.
+
+    ``tau = r_cg x (m R_WB^T (0, 0, -g))`` with ``r_cg`` (``joint.cog_offset``, B = FRD)
+    the centre of gravity relative to the joint: a lateral offset (x, y) is a static
+    imbalance the controllers must hold against (it tilts the rig when disarmed); z > 0
+    (below the joint) makes a stable pendulum, z < 0 (above) an inverted one. Magnitude:
+    a few millimetres of assembly tolerance (battery, cables, the ball joint's seat) on
+    2.23 kg give 0.02-0.1 N m; the extra masses of Fig. 15 are the same physics
+    (``disturbances.extra_mass_effects``).
+    """
+    if not hw.cog_on:
+        return 0.0, 0.0, 0.0
+    m = hw.cog_moment
+    fx = -g * R[2, 0]
+    fy = -g * R[2, 1]
+    fz = -g * R[2, 2]
+    return (m[1] * fz - m[2] * fy,
+            m[2] * fx - m[0] * fz,
+            m[0] * fy - m[1] * fx)
+
+
+# --- motors -------------------------------------------------------------------------------
+
+
+@jit(inline="always")
+def motor_thrust(v, i, k_v, f_ceiling, efficiency, hw):
+    """True thrust (N) of motor ``i`` at effective voltage ``v``: Eq. 40 as the hardware has it.
+
+    * the curve: Eq. 40, ``F = k_v V``, is the rig's linear fit (Fig. 11). A propeller's
+      thrust grows about as ``Omega^2`` and a BLDC's speed about as ``V``: the real curve
+      is convex. Reading: ``F = F_p (V / V_p)^n`` through the pivot ``(V_p, F_p)`` where it
+      meets Eq. 40 (``motors.curve_pivot_grf``, default the hover thrust); ``n = 1`` is
+      Eq. 40. The controllers keep inverting Eq. 40 (they do not know the curve). With
+      ``n = ln(850 / 557.7) / ln(15 / 11.71) = 1.70`` the 850 gr.F of Sec. 3-2 is reached at
+      15 V (the paper's Eq. 40 gives 714 gr.F there): one reading of that inconsistency;
+    * ``hw.gain[i]``: per-motor gain times the common thrust-chain gain
+      (``motors.thrust_gain``), e.g. motors and propellers differing by a few per cent;
+    * ``hw.bias``: a common additive thrust bias of a running motor (``motors.thrust_bias_grf``);
+    * ``efficiency``: a motor fault's share (sensors/faults.py);
+    * clipped to ``[0, f_ceiling]`` (850 gr.F, Sec. 3-2).
+    """
+    if hw.curve_n == 1.0 or v <= 0.0:
+        f = k_v * v
+    else:
+        f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+    if hw.bias != 0.0 and v > 0.0:
+        f += hw.bias
+    if f < 0.0:
+        f = 0.0
+    elif f > f_ceiling:
+        f = f_ceiling
+    return efficiency * (hw.gain[i] * f)
+
+
+@jit(inline="always")
+def actuator_chain(k, v_cmd, hw):
+    """The voltages the motors receive at physics step ``k`` for the commands ``v_cmd``.
+
+    * sensing-to-actuation delay: the firmware's computation (the fuzzy controller on a
+      72 MHz STM32 takes a good part of a 2 ms control period), the PWM frame and the ESC's
+      own update: ``control.actuation_delay`` seconds, rounded to physics steps; a ring
+      buffer of the last commands;
+    * ESC command quantisation: ``motors.command_steps`` levels over the supply (a
+      1000-2000 us servo pulse read with 1 us resolution has 1000);
+    * ESC dead-band: commands below ``motors.esc_deadband_v`` give 0 V (the motor does not
+      start below a minimum throttle).
+
+    Returns ``v_cmd`` itself when none is configured (the ideal plant).
+    """
+    if not hw.act_on:
+        return v_cmd
+    buf = hw.cmd_buf
+    n = buf.shape[0]
+    row = k % n
+    for j in range(4):
+        buf[row, j] = v_cmd[j]
+    src = (k - hw.delay_steps) % n
+    out = hw.cmd_out
+    for j in range(4):
+        v = buf[src, j]
+        if hw.quantum > 0.0:
+            v = math.floor(v / hw.quantum + 0.5) * hw.quantum
+        if v < hw.deadband:
+            v = 0.0
+        out[j] = v
+    return out
+
+
+# --- random body torque -------------------------------------------------------------------
+
+
+@jit(inline="always")
+def _uniform(state):
+    """splitmix64: the next uniform in (0, 1) from ``state[0]`` (deterministic, allocation-free)."""
+    z = state[0] + np.uint64(0x9E3779B97F4A7C15)
+    state[0] = z
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z = z ^ (z >> np.uint64(31))
+    return ((z >> np.uint64(11)) + 0.5) * (1.0 / 9007199254740992.0)
+
+
+@jit(inline="always")
+def _normal(state):
+    """A standard normal by Box-Muller from two splitmix64 uniforms."""
+    u1 = _uniform(state)
+    u2 = _uniform(state)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@jit(inline="always")
+def torque_noise_step(hw):
+    """Advance the random body torque by one physics step (held over the step, Eq. 3).
+
+    Prop wash of the four rotors on the arms and the drag of the sensor and power cables
+    act as a random torque: first-order coloured noise with corner
+    ``disturbance.torque_noise_corner_hz`` and standard deviation
+    ``disturbance.torque_noise`` per body axis, ``n_k = a n_{k-1} + b sigma w_k``
+    (``a = exp(-2 pi f_c dt)``, ``b = sqrt(1 - a^2)``), ``w_k`` standard normal from a
+    splitmix64 stream seeded by ``sim.seed``. Magnitude: a few per cent of the hover
+    torque authority; the paper's Fig. 12 traces wander by about 0.5-1 deg between shocks.
+    """
+    if not hw.noise_on:
+        return
+    a = hw.noise_a
+    b = hw.noise_b
+    for i in range(3):
+        hw.noise_torque[i] = a * hw.noise_torque[i] + b * hw.noise_sigma[i] * _normal(hw.rng)
+
+
+# --- frame vibration ----------------------------------------------------------------------
+
+
+@jit(inline="always")
+def frame_vibration_step(dt, x, pp, vib_out):
+    """Frame vibration at the IMU modules (B): gyro (0:3, rad/s) and accelerometer (3:6, m/s^2).
+
+    Each rotor's blade-pass excitation ``A (Omega_i / Omega_hover)^2 sin(phase_i)``,
+    ``phase_i`` advancing at ``blades x Omega_i`` (``Omega_i`` from the motor's true thrust,
+    Eq. 38); the frame carries it to all five modules alike, so the ensemble (Sec. 4-1)
+    cannot average it away. Magnitude: unbalanced 10-inch propellers on a light frame give
+    0.5-3 m/s^2 and 0.01-0.05 rad/s at the IMU (typical flight-controller vibration logs);
+    the load cells' own vibration noise is modelled in sensors/load_cell.py. ``x`` is the
+    rig state, ``pp`` the PhysicsParams; advances the phases by ``dt`` (the IMU period).
+    """
+    hw = pp.hw
+    for j in range(6):
+        vib_out[j] = 0.0
+    if not hw.vib_on:
+        return
+    for i in range(4):
+        f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], hw)
+        w = math.sqrt(f / pp.kf) if f > 0.0 else 0.0
+        ph = hw.vib_phase[i] + hw.vib_blades * w * dt
+        hw.vib_phase[i] = ph - 2.0 * math.pi * math.floor(ph / (2.0 * math.pi))
+        r = w / hw.vib_omega_ref
+        s = r * r * math.sin(hw.vib_phase[i])
+        for j in range(3):
+            vib_out[j] += hw.vib_gyro[j] * s
+            vib_out[3 + j] += hw.vib_acc[j] * s

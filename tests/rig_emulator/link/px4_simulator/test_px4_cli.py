@@ -1,0 +1,50 @@
+"""``rig-emulator serve --px4-simulator`` as a user runs it: a process, a flight stack, a clean stop,
+and the options it refuses."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from gcs_tools.px4_peer import StreamLink, fly
+from rig_emulator.testing.rig import RigProcess
+
+
+def _wait_line(rig, prefix: str, timeout: float = 60.0) -> str | None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for line in list(rig.output):
+            if line.startswith(prefix):
+                return line
+        time.sleep(0.02)
+    return None
+
+
+def test_serve_px4_simulator_process():
+    with RigProcess(speedup=1, args=["--px4-simulator", "127.0.0.1:0", "--no-persist"]) as rig:
+        line = _wait_line(rig, "rig-emulator: px4 simulator on tcpin:127.0.0.1:")
+        assert line is not None, rig.output
+        port = int(line.rsplit(":", 1)[1])
+        link = StreamLink.tcp("127.0.0.1", port)
+        log = fly(link, 1.0)
+        link.close()
+        assert log.steps >= 250 and log.gps >= 9
+        assert _wait_line(rig, "rig-emulator: flight stack gone") is not None
+        assert rig.stop(signal.SIGINT) == 0
+        assert any(line.startswith("rig-emulator: stopped at t = ") for line in rig.output)
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--px4-simulator", "nonsense"], "--px4-simulator 'nonsense'"),
+    (["--px4-simulator", "4560", "--start-paused"], "--start-paused does not apply"),
+    (["--px4-simulator", "4560", "--px4-rate", "0"], "--px4-rate 0: must be > 0"),
+])
+def test_refused_options(args, message):
+    proc = subprocess.run([sys.executable, "-m", "rig_emulator", "serve", "--no-persist", "--mavlink",
+                           "tcpin:127.0.0.1:0", *args], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    assert message in proc.stderr

@@ -1,0 +1,62 @@
+"""Two plants, one flag (issue 13): ``hilms-ideal`` is the ideal plant bit for bit as before the
+hardware effects existed; ``hilms`` (the default) is the hardware rig, deterministic, and its
+joint friction brings a disarmed, tumbling rig to rest."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rig_emulator.api import simulate
+from rig_emulator.config.loader import load_config
+from rig_emulator.simulation.run import Simulation
+
+# Figures of the ideal plant computed on commit 3f19de9, before any hardware effect existed
+# (`simulate(scenario, strategy, duration, seed=3)`, then the default airframe): mean errors
+# (Eq. 45) and the sum of the last logged row's true attitude (phi + theta + psi, rad).
+PINNED = {
+    ("hover-shocks", "smc", 4.0): ({"phi_deg": 0.012102319156226601, "theta_deg": 2.5342379935720563,
+                                    "psi_deg": 0.23867415738337644}, 0.7204566141723374),
+    ("hover-shocks", "flc", 4.0): ({"phi_deg": 0.004485771273446328, "theta_deg": 0.09219313062503018,
+                                    "psi_deg": 0.04836878840316084}, 0.053163479692597125),
+    ("helix", "smc-flc", 8.0): ({"phi_deg": 1.0023718198165363, "theta_deg": 1.197782576993275,
+                                 "psi_deg": 0.2946182450923936, "x_m": 0.01801393776793824,
+                                 "y_m": 0.016720200352928715, "z_m": 0.010151456776033532}, 4.452933931188545),
+    ("helix", "flc", 8.0): ({"phi_deg": 0.1702448774282316, "theta_deg": 0.2623293614688193,
+                             "psi_deg": 0.10256802508215368, "x_m": 0.003992035894260298,
+                             "y_m": 0.004054541471673139, "z_m": 0.029149281512298852}, 4.487458222990709),
+}
+
+
+@pytest.mark.parametrize("key", list(PINNED))
+def test_hilms_ideal_is_the_ideal_plant_bit_for_bit(key):
+    scenario, strategy, duration = key
+    errors, last = PINNED[key]
+    r = simulate(scenario, strategy=strategy, duration=duration, seed=3, airframe="hilms-ideal")
+    me = r.mean_errors()
+    assert {k: me[k] for k in errors} == errors  # exact floats
+    assert float(r.log[-1, 1:4].sum()) == last
+
+
+def test_the_hardware_rig_is_another_plant_and_deterministic():
+    a = simulate("hover-shocks", strategy="flc", duration=4.0, seed=3)
+    b = simulate("hover-shocks", strategy="flc", duration=4.0, seed=3)
+    assert a.config["airframe.name"] == "hilms"
+    assert np.array_equal(a.log, b.log, equal_nan=True)
+    ideal = PINNED[("hover-shocks", "flc", 4.0)][0]
+    assert a.mean_errors()["theta_deg"] != ideal["theta_deg"]
+
+
+def _tumble(airframe: str, seconds: float) -> float:
+    """Body rate (rad/s) of a disarmed rig ``seconds`` after it was left tumbling at about 6 rad/s."""
+    sim = Simulation(load_config(airframe, scenario="hover", overrides={"sim.duration": seconds}))
+    sim.x[10:13] = [3.0, -4.0, 2.5]
+    sim.armed = False
+    sim.advance(int(round(seconds / sim.dt)))
+    return float(np.linalg.norm(sim.x[10:13]))
+
+
+def test_joint_friction_brings_a_disarmed_tumbling_rig_to_rest_in_seconds():
+    assert _tumble("hilms", 10.0) < 0.05  # at rest (a pendulum's last sway of a few hundredths)
+    assert _tumble("hilms-ideal", 10.0) > 5.0  # frictionless joint: it spins on for ever (issue 13)
+    assert math.isfinite(_tumble("hilms", 1.0))
