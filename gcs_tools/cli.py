@@ -422,6 +422,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # `rig-gcs param list ... | head`: the reader left; stop without a traceback
+        from protocol.closed_pipe import quiet_exit_on_closed_pipe
+
+        return quiet_exit_on_closed_pipe()
 
 
 if __name__ == "__main__":

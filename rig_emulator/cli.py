@@ -327,6 +327,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:  # Ctrl-C before a command installed its own handling (e.g. while compiling)
         print("rig-emulator: interrupted", file=sys.stderr, flush=True)
         return 130
+    except BrokenPipeError:  # `rig-emulator params | head`: the reader left; stop without a traceback
+        from protocol.closed_pipe import quiet_exit_on_closed_pipe
+
+        return quiet_exit_on_closed_pipe()
 
 
 if __name__ == "__main__":
