@@ -59,7 +59,7 @@ JITTER_TARGET = Target("<=", 1.0, "issue 8")
 def jitter_rig_probe(duration_s: float, warm_up: bool = True) -> dict:
     """Chunk period error, lateness and busy time of the served rig; see the module docstring."""
     from rig_emulator.link.loop_timing import summarize
-    from rig_emulator.link.testing import connect, recv
+    from rig_emulator.testing.rig import connect, recv
 
     figs: dict = {"warmup_s": ensure_compiled() if warm_up else 0.0}
     load = procfs.MachineLoad()

@@ -6,7 +6,7 @@ The same functions run against the rig and against the reference responder
 * :func:`command_round_trips` - COMMAND_LONG -> its COMMAND_ACK, one at a time, with a random
   pause before each so that the requests fall at every phase of the rig's 5 ms physics chunks;
 * :func:`mission_items` / :func:`mission_round_trip` - upload and download of an N-item
-  mission with :class:`rig_emulator.link.testing.MissionClient` (one request in flight, as
+  mission with :class:`rig_emulator.testing.rig.MissionClient` (one request in flight, as
   QGroundControl and MAVSDK do);
 * :func:`count_stream` - every message received during a wall-clock window, with the span of
   simulated time the rig's ATTITUDE stamps cover; :func:`drain` - read until the link is quiet;
@@ -28,7 +28,7 @@ import numpy as np
 
 from protocol.dialect import mavlink as M
 from protocol.mission_items import MissionItem
-from rig_emulator.link.testing import MissionClient, stamp_s
+from rig_emulator.testing.rig import MissionClient, stamp_s
 
 NAN = float("nan")
 #: The command timed: a read-only query the rig answers (ACK, then MESSAGE_INTERVAL).

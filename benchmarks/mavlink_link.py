@@ -53,13 +53,13 @@ RIG_PROBE = "link-rig"
 REFERENCE_PROBE = "link-reference"
 CACHE_GROUP = "served-rig"
 STRESS_HZ = 200
-ATTITUDE_HZ = 25.0  # its default rate (rig_emulator/link/stream_table.py)
+ATTITUDE_HZ = 25.0  # its default rate (rig_emulator/link/telemetry/stream_table.py)
 #: Simulated seconds per wall second that count as "control rate held" at speed-up 1.
 HELD_TARGET = Target(">=", 0.99, "control rate held at speed-up 1 (issue 8)")
 
 
 def _connect(url: str):
-    from rig_emulator.link.testing import connect, recv
+    from rig_emulator.testing.rig import connect, recv
 
     conn = connect(url)
     if recv(conn, ["HEARTBEAT", "ATTITUDE"], timeout=30.0) is None:
@@ -156,7 +156,7 @@ def mission_items_for(n: int):
        description="minimal pymavlink responder (no simulation, no streams), same client code")
 def link_reference_probe(commands: int, mission_items: int) -> dict:
     """Command round trips and mission transfer against the reference responder."""
-    from rig_emulator.link.testing import connect
+    from rig_emulator.testing.rig import connect
 
     items = mission_items_for(mission_items)
     figs: dict = {}

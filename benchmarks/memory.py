@@ -45,7 +45,7 @@ def _mib(kib: int) -> float:
 def mem_rig_probe(idle_s: float, fly_s: float, warm_up: bool = True) -> dict:
     """RSS of the served rig idle and flying; see the module docstring."""
     from protocol.dialect import mavlink as M
-    from rig_emulator.link.testing import MissionClient, command, connect, recv
+    from rig_emulator.testing.rig import MissionClient, command, connect, recv
 
     figs: dict = {"warmup_s": ensure_compiled() if warm_up else 0.0}
     with ServedRig(speedup=1.0, timing=False) as rig:

@@ -20,9 +20,9 @@ from .harness import BenchmarkUnavailable
 
 def _testing():
     try:
-        from rig_emulator.link import testing
+        from rig_emulator.testing import rig as testing
     except ImportError as exc:
-        raise BenchmarkUnavailable(f"rig_emulator.link.testing is not importable: {type(exc).__name__}: {exc}") from None
+        raise BenchmarkUnavailable(f"rig_emulator.testing.rig is not importable: {type(exc).__name__}: {exc}") from None
     return testing
 
 

@@ -8,7 +8,7 @@
 >>> result.mean_errors["x_m"], result.tlog, result.arrays("LOCAL_POSITION_NED", "x")
 
 :class:`RigSession` runs ``rig-emulator serve`` in a subprocess on free ports
-(:class:`rig_emulator.link.testing.RigProcess`), connects a ground link for commands and a
+(:class:`rig_emulator.testing.rig.RigProcess`), connects a ground link for commands and a
 second one that records everything to a .tlog in a thread (:class:`gcs_tools.logger.Recorder`).
 :meth:`RigSession.upload` / :meth:`download` run the mission protocol; :meth:`link` is the
 :class:`gcs_tools.link.Link` for anything else. :func:`headless_tlog` writes a headless run
@@ -53,7 +53,7 @@ class RigSession:
     """A live rig on free ports with a ground link and a running logger (see the module doc)."""
 
     def __init__(self, speedup: float = 20.0, log_path=None, rig_args=(), log_rates=None):
-        from rig_emulator.link.testing import RigProcess, client_url
+        from rig_emulator.testing.rig import RigProcess, client_url
 
         self._tmp = None
         if log_path is None:
@@ -118,7 +118,7 @@ class RigSession:
 def headless_tlog(path, scenario: str, **simulate_kwargs):
     """Run a scenario headless (:func:`rig_emulator.api.simulate`), write it as a .tlog; returns (SimResult, RunResult)."""
     from rig_emulator.api import simulate
-    from rig_emulator.link.tlog_export import export_tlog
+    from rig_emulator.link.telemetry.tlog_export import export_tlog
 
     result = simulate(scenario, **simulate_kwargs)
     export_tlog(result, path)

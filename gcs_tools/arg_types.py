@@ -17,6 +17,17 @@ def finite_number(text: str) -> float:
     return v
 
 
+def positive_number(text: str) -> float:
+    """A finite float > 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"{text!r}: must be > 0")
+    return v
+
+
 def whole_number_at_least(minimum: int):
     """An argparse type: an int >= ``minimum``."""
 

@@ -37,6 +37,7 @@ import sys
 from pathlib import Path
 
 from gcs_tools.arg_types import finite_number as _number
+from gcs_tools.arg_types import positive_number as _positive
 from gcs_tools.errors import EXIT_OK, EXIT_USAGE, GcsError, OperationError, UsageError
 from protocol.geodesy import Home
 from protocol.mission_files import MissionFileError
@@ -45,18 +46,6 @@ DEFAULT_HOME_TEXT = "35.7,51.4,1200"  # rig-emulator serve's default --home (rig
 DEFAULT_HOME = Home(*(float(v) for v in DEFAULT_HOME_TEXT.split(",")))
 
 PROG = "rig-gcs"
-
-
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (v > 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"{text!r}: must be > 0")
-    return v
-
-
 
 
 def _size(text: str) -> tuple[float, float]:
@@ -147,11 +136,9 @@ def _vehicle_home(link):
 
 
 def _open_link(args):
-    from gcs_tools.link import Link
+    from gcs_tools.link import open_link
 
-    link = Link(args.connection, target_system=args.sysid)
-    link.wait_vehicle(args.heartbeat_timeout)
-    return link
+    return open_link(args)
 
 
 def cmd_mission(args) -> int:
@@ -406,7 +393,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     from gcs_tools.param_cli import add_param_parser
 
-    add_param_parser(sub, _positive)  # rig-gcs param list|get|set|save|load
+    add_param_parser(sub)  # rig-gcs param list|get|set|save|load
 
     from gcs_tools.reproduce.cli import add_parser as add_reproduce_parser
 
@@ -437,6 +424,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # `rig-gcs param list ... | head`: the reader left; stop without a traceback
+        from protocol.closed_pipe import quiet_exit_on_closed_pipe
+
+        return quiet_exit_on_closed_pipe()
 
 
 if __name__ == "__main__":

@@ -4,7 +4,8 @@ For each waypoint the tool streams position targets (SET_POSITION_TARGET_LOCAL_N
 the time-parameterised virtual line from where the vehicle was when the leg began to the
 waypoint, and switches to the next waypoint when the vehicle's reported position
 (LOCAL_POSITION_NED) is within the switching radius - with the rig's own functions
-(:mod:`protocol.waypoint_switching`: ``leg_duration``, ``line_setpoint``,
+(:mod:`protocol.waypoint_switching`, compiled in
+:mod:`rig_emulator.guidance.waypoint_switching`: ``leg_duration``, ``line_setpoint``,
 ``waypoint_reached``). Time is the vehicle's clock (``time_boot_ms`` of LOCAL_POSITION_NED),
 so the run is the same at any speed-up of the rig. One set-point goes out per position
 report; the vehicle holds the last one between reports.
@@ -22,7 +23,7 @@ from gcs_tools.errors import OperationError
 from gcs_tools.link import Link
 from protocol.dialect import mavlink as M
 from protocol.frames import enu_to_ned, ned_to_enu
-from protocol.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
+from rig_emulator.guidance.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
 
 POSITION_ONLY = (M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMASK_VY_IGNORE
                  | M.POSITION_TARGET_TYPEMASK_VZ_IGNORE | M.POSITION_TARGET_TYPEMASK_AX_IGNORE

@@ -175,3 +175,12 @@ def message_id(name: str) -> int:
     if cls is None:
         raise UsageError(f"unknown MAVLink message {name!r}")
     return cls.id
+
+
+def open_link(args) -> Link:
+    """A :class:`Link` to ``args.connection`` whose vehicle (``args.sysid``, or the first heard)
+    has been heard within ``args.heartbeat_timeout`` seconds: what every ``rig-gcs`` subcommand
+    that talks to a vehicle opens first."""
+    link = Link(args.connection, target_system=args.sysid)
+    link.wait_vehicle(args.heartbeat_timeout)
+    return link

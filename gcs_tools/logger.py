@@ -1,7 +1,7 @@
 """Telemetry logging to .tlog, and CSV export of chosen fields.
 
 :func:`record` writes every message the link receives (any system, any type) with a
-wall-clock timestamp, one ``write`` per record (:class:`rig_emulator.link.tlog_export.TlogWriter`):
+wall-clock timestamp, one ``write`` per record (:class:`rig_emulator.link.telemetry.tlog_export.TlogWriter`):
 a logger killed at any moment leaves a valid log up to its last complete message. Nothing
 is kept in memory per message, so long runs log at a steady memory.
 
@@ -23,7 +23,7 @@ from gcs_tools.link import Link, message_id
 from gcs_tools.tlog_read import iter_tlog
 from protocol.atomic_file import atomic_path
 from protocol.dialect import mavlink as M
-from rig_emulator.link.tlog_export import TlogWriter
+from rig_emulator.link.telemetry.tlog_export import TlogWriter
 
 
 def parse_fields(specs) -> list[tuple[str, str, int | None]]:

@@ -18,10 +18,11 @@ from __future__ import annotations
 
 
 from gcs_tools.arg_types import finite_number as _value
+from gcs_tools.arg_types import positive_number as positive
 from gcs_tools.errors import EXIT_OK, UsageError
 
 
-def add_param_parser(sub, positive) -> None:
+def add_param_parser(sub) -> None:
     p = sub.add_parser("param", help="list, get, set, save or load the vehicle's parameters",
                        description="list: every parameter (NAME VALUE); get NAME; set NAME VALUE (checked against the "
                                    "vehicle's echo); save FILE (QGroundControl .params); load FILE (QGroundControl "
@@ -45,7 +46,7 @@ def _expect(args, n: int, usage: str) -> list:
 
 
 def cmd_param(args) -> int:
-    from gcs_tools.cli import _open_link
+    from gcs_tools.link import open_link
     from gcs_tools.param_files import load_params, save_params, value_text
     from gcs_tools.params_client import ParamClient, load
 
@@ -66,7 +67,7 @@ def cmd_param(args) -> int:
         (path,) = _expect(args, 1, "FILE")
         if args.action == "load":
             lines = load_params(path)  # checked before connecting
-    with _open_link(args) as link:
+    with open_link(args) as link:
         client = ParamClient(link, args.timeout, args.retries)
         if args.action == "list":
             params = sorted(client.fetch_all().values(), key=lambda p: p.index)

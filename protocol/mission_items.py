@@ -1,6 +1,6 @@
 """MAVLink mission items <-> the rig's mission: frames, home conversion, validation.
 
-Shared by the rig's mission server (``rig_emulator/link/mission_*.py``) and the ground tools
+Shared by the rig's mission server (``rig_emulator/link/mission/``) and the ground tools
 (``gcs_tools/``), so both read a mission item the same way.
 
 Item 0 (the lead's decision)

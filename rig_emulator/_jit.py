@@ -49,7 +49,7 @@ COMPILED_ROOTS = (
     "rig_emulator/simulation",
     "rig_emulator/sensors",
     "rig_emulator/estimation",
-    "protocol/waypoint_switching.py",
+    "protocol/waypoint_switching.py",  # plain Python compiled by rig_emulator/guidance/waypoint_switching.py
 )
 _KEEP_CACHES = 8
 

@@ -113,7 +113,7 @@ def cmd_simulate(args) -> int:
 def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
     """A .tlog is still exported from the whole run held in memory (not streamed yet); its
     records are stamped from ``start_unix_s`` (default: now, whole seconds)."""
-    from rig_emulator.link.tlog_export import export_tlog
+    from rig_emulator.link.telemetry.tlog_export import export_tlog
     from rig_emulator.simulation.faults import failsafe_cause_text
     from rig_emulator.simulation.run import Simulation
 
@@ -327,6 +327,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:  # Ctrl-C before a command installed its own handling (e.g. while compiling)
         print("rig-emulator: interrupted", file=sys.stderr, flush=True)
         return 130
+    except BrokenPipeError:  # `rig-emulator params | head`: the reader left; stop without a traceback
+        from protocol.closed_pipe import quiet_exit_on_closed_pipe
+
+        return quiet_exit_on_closed_pipe()
 
 
 if __name__ == "__main__":

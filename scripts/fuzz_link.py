@@ -6,10 +6,10 @@ Run from the repository root::
     .venv/bin/python scripts/fuzz_link.py --frames 20000 --tcp-frames 0 --seed 7
 
 Starts ``rig-emulator serve --speedup 1`` with a ``tcpin`` and a ``udpin`` endpoint on free
-ports (:class:`rig_emulator.link.testing.RigProcess`), then
-:func:`rig_emulator.link.testing_fuzz_session.fuzz_rig`: garbage, truncated, oversized,
+ports (:class:`rig_emulator.testing.rig.RigProcess`), then
+:func:`rig_emulator.testing.fuzz_session.fuzz_rig`: garbage, truncated, oversized,
 bad-CRC, relabelled and bit-flipped frames and CRC-valid messages of every handled type with
-random field values (:class:`rig_emulator.link.testing_fuzz.FrameFactory`), each datagram's
+random field values (:class:`rig_emulator.testing.fuzz.FrameFactory`), each datagram's
 expected counting computed by a fresh pymavlink parser. Afterwards the rig must be alive,
 ACK a command, answer a parameter read, have counted exactly what the oracle predicts with
 no handler error, and its step counter must agree with its simulated time. Prints the
@@ -26,8 +26,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from rig_emulator.link.testing import RigProcess  # noqa: E402
-from rig_emulator.link.testing_fuzz_session import fuzz_rig  # noqa: E402
+from rig_emulator.testing.rig import RigProcess  # noqa: E402
+from rig_emulator.testing.fuzz_session import fuzz_rig  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -5,8 +5,8 @@ Run from the repository root::
     .venv/bin/python scripts/lossy_link.py                    # 20 % loss each way, 10 % duplicated, 10 % re-ordered, 20-50 ms
     .venv/bin/python scripts/lossy_link.py --rounds 5 --drop 0.3 --retries 5
 
-A rig (:class:`rig_emulator.link.testing.RigThread`, speed-up 1, a ``udpin`` endpoint) behind
-:class:`rig_emulator.link.testing_relay.LossyRelay`; each round, with gcs_tools' clients and
+A rig (:class:`rig_emulator.testing.rig.RigThread`, speed-up 1, a ``udpin`` endpoint) behind
+:class:`rig_emulator.testing.relay.LossyRelay`; each round, with gcs_tools' clients and
 the retry counts given (default: QGroundControl's 5):
 
 * the whole parameter list, compared value by value with the rig's table;
@@ -39,8 +39,8 @@ from gcs_tools.link import Link  # noqa: E402
 from gcs_tools.missions import mission_from_enu  # noqa: E402
 from gcs_tools.params_client import ParamClient  # noqa: E402
 from protocol.dialect import mavlink as M  # noqa: E402
-from rig_emulator.link.testing import RigThread  # noqa: E402
-from rig_emulator.link.testing_relay import LossyRelay  # noqa: E402
+from rig_emulator.testing.rig import RigThread  # noqa: E402
+from rig_emulator.testing.relay import LossyRelay  # noqa: E402
 
 
 def main(argv=None) -> int:

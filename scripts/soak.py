@@ -9,7 +9,7 @@ Starts ``rig-emulator serve`` (a real process, TCP endpoint on a free port) and 
 
 * ``rig-gcs log`` (a real process) writing ``soak.tlog`` in ``--out``;
 * a telemetry client (this script) reading every message and, every ``--sample`` wall
-  seconds, the rig's counters (:mod:`rig_emulator.link.link_status`) and its resident memory
+  seconds, the rig's counters (:mod:`rig_emulator.link.telemetry.link_status`) and its resident memory
   (``/proc/PID/status`` VmRSS);
 * a ground station (a thread of this script, gcs_tools' mission client) uploading a mission
   every ``--upload-every`` wall seconds, alternating the rectangle and the helix, and
@@ -43,9 +43,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from rig_emulator.link.link_status import read_link_status  # noqa: E402
+from rig_emulator.link.telemetry.link_status import read_link_status  # noqa: E402
 from rig_emulator.link.serve_args import parse_speedup  # noqa: E402
-from rig_emulator.link.testing import RigProcess, client_url, connect  # noqa: E402
+from rig_emulator.testing.rig import RigProcess, client_url, connect  # noqa: E402
 
 
 def rss_kib(pid: int) -> int:

@@ -107,7 +107,7 @@ def fly_rectangle(seed: int, duration_s: float, strategy: str = "smc-flc", width
                   radius: float = 0.08, airframe: str = "hilms", overrides: dict | None = None) -> LiveRun:
     """Fly the Fig. 19 rectangle on a rig process over MAVLink (see the module docstring), on the
     plant ``airframe`` with parameter ``overrides`` (dotted key -> TOML-expressible value)."""
-    from rig_emulator.link.testing import RigProcess, client_url
+    from rig_emulator.testing.rig import RigProcess, client_url
 
     points = rectangle_points(width, height, ALTITUDE_M)
     mission = mission_from_enu(points, radius, "local")

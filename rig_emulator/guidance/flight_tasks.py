@@ -1,7 +1,7 @@
 """Flight tasks a flight controller runs on top of its guidance: take-off, landing (with a
 land detector that disarms), return to home, fly-to and hold.
 
-No MAVLink here: the link (:mod:`rig_emulator.link.flight_commands`) starts tasks and reads
+No MAVLink here: the link (:mod:`rig_emulator.link.commands.flight_commands`) starts tasks and reads
 what :meth:`FlightTasks.poll` reports. Every task is a short path of Sec. 4-4 virtual
 lines flown by the rig's own waypoint guidance (:meth:`LiveRig.fly_path`), so take-off,
 landing and return follow the same reference shaping as a mission. World ENU, metres,

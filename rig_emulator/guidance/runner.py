@@ -35,7 +35,7 @@ from rig_emulator.control.controller import (
 )
 from rig_emulator.guidance.offboard import offboard_references
 from rig_emulator.guidance.trajectories import harmonic_attitude, helix_eq46
-from protocol.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
+from rig_emulator.guidance.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
 
 HOVER = 0
 ATTITUDE = 1

@@ -8,15 +8,15 @@ faster, ``0`` or ``max`` runs as fast as possible. SIGINT/SIGTERM stop the rig c
 the bound port, so scripts can bind port 0 and read the port back.
 
 Parameters set over MAVLink and the mission are kept in ``./rig-state`` (``--state-dir``,
-``--wipe``, ``--no-persist``; :mod:`rig_emulator.link.state_dir`); ``--signing-key`` turns
-MAVLink 2 signing on (:mod:`rig_emulator.link.signing`).
+``--wipe``, ``--no-persist``; :mod:`rig_emulator.link.state.directory`); ``--signing-key`` turns
+MAVLink 2 signing on (:mod:`rig_emulator.link.signing.policy`).
 
 ``--instance N`` (``-I N``) runs a rig beside others as ArduPilot SITL's ``-I N`` does:
 system id N + 1, default endpoints ``udpout:127.0.0.1:14550+10N`` and
 ``tcpin:127.0.0.1:5760+10N``, state directory ``rig-state-N`` (``--sysid``, ``--mavlink``
 and ``--state-dir`` still override). Events (arming, mode changes, mission items, faults,
 failsafes, landings) are printed one per line, ``rig-emulator: [  t_sim] text``
-(:mod:`rig_emulator.link.console`; ``--quiet`` turns them off).
+(:mod:`rig_emulator.link.commands.console`; ``--quiet`` turns them off).
 
 ``--start-paused`` holds the simulated clock at 0 until a mission is started (MISSION_START
 or AUTO.MISSION): a script uploads, arms and starts at its own pace and the flight, stamped
@@ -30,7 +30,7 @@ import os
 import signal
 
 from rig_emulator.config.loader import ConfigError, load_config
-from rig_emulator.link.endpoints import EndpointError
+from rig_emulator.link.endpoints.sockets import EndpointError
 from rig_emulator.link.loop_timing import LoopTiming
 from rig_emulator.link.px4_simulator.serve_px4 import check_px4_args, serve_px4
 from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS

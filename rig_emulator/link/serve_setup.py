@@ -6,10 +6,10 @@ the rig starts; nothing here prints the key.
 
 from __future__ import annotations
 
-from rig_emulator.link.rig_state import RigState
-from rig_emulator.link.signing import UNSIGNED_ALLOWED, LinkSigning, message_name
-from rig_emulator.link.signing_key import SigningKeyError, parse_signing_key, read_key_file
-from rig_emulator.link.state_dir import DEFAULT_STATE_DIR, StateError
+from rig_emulator.link.state.rig_state import RigState
+from rig_emulator.link.signing.policy import UNSIGNED_ALLOWED, LinkSigning, message_name
+from rig_emulator.link.signing.key import SigningKeyError, parse_signing_key, read_key_file
+from rig_emulator.link.state.directory import DEFAULT_STATE_DIR, StateError
 
 
 def signing_key_from_args(args, log) -> tuple[bytes | None, str]:

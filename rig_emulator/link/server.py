@@ -12,8 +12,8 @@ the host cannot keep up the pacing re-anchors instead of bursting (counted in
 Bad input never stops the loop: unparsable bytes, bad CRCs, messages for other systems and
 unusable fields are counted in :attr:`RigServer.counters` and dropped.
 
-Optional: ``signing`` (:class:`~rig_emulator.link.signing.LinkSigning`) signs every link and
-rejects what is not signed with its key; ``state`` (:class:`~rig_emulator.link.rig_state.RigState`)
+Optional: ``signing`` (:class:`~rig_emulator.link.signing.policy.LinkSigning`) signs every link and
+rejects what is not signed with its key; ``state`` (:class:`~rig_emulator.link.state.rig_state.RigState`)
 stores accepted parameter changes and missions before they are acknowledged.
 """
 
@@ -25,30 +25,30 @@ import time
 
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home
-from rig_emulator.link import telemetry_status
-from rig_emulator.link.channel import Channel
-from rig_emulator.link.command_dedup import CommandDedup
-from rig_emulator.link import standard_modes
-from rig_emulator.link.commands import Command, execute
-from rig_emulator.link.console import Console
-from rig_emulator.link.flight_control import FlightControl
-from rig_emulator.link.gcs_loss import GcsLoss
-from rig_emulator.link.counters import LinkCounters
-from rig_emulator.link.endpoints import open_endpoint
-from rig_emulator.link.fault_report import FaultReporter
-from rig_emulator.link.component_metadata import metadata_files
-from rig_emulator.link.flight_monitors import FenceMonitor, OffboardLossMonitor
-from rig_emulator.link.ftp_server import FileStore, FtpServer, reply_message
-from rig_emulator.link.ideal_sensors import load_sensor_model
-from rig_emulator.link.mission_exec import MissionExecutor
-from rig_emulator.link.mission_transfer import MissionTransfer
-from rig_emulator.link.modes import FlightModes
-from rig_emulator.link.offboard_setpoints import OffboardSetpoints
-from rig_emulator.link.param_service import ParamService
-from rig_emulator.link.signing import refuse_setup_signing
-from rig_emulator.link.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
-from rig_emulator.link.streams import StreamSchedule
-from rig_emulator.link.telemetry_context import TelemetryContext
+from rig_emulator.link.telemetry import status as telemetry_status
+from rig_emulator.link.endpoints.channel import Channel
+from rig_emulator.link.commands.dedup import CommandDedup
+from rig_emulator.link.commands import standard_modes
+from rig_emulator.link.commands.command_long import Command, execute
+from rig_emulator.link.commands.console import Console
+from rig_emulator.link.commands.flight_control import FlightControl
+from rig_emulator.link.commands.gcs_loss import GcsLoss
+from rig_emulator.link.endpoints.counters import LinkCounters
+from rig_emulator.link.endpoints.sockets import open_endpoint
+from rig_emulator.link.telemetry.fault_report import FaultReporter
+from rig_emulator.link.ftp.component_metadata import metadata_files
+from rig_emulator.link.commands.flight_monitors import FenceMonitor, OffboardLossMonitor
+from rig_emulator.link.ftp.server import FileStore, FtpServer, reply_message
+from rig_emulator.link.telemetry.ideal_sensors import load_sensor_model
+from rig_emulator.link.mission.executor import MissionExecutor
+from rig_emulator.link.mission.transfer import MissionTransfer
+from rig_emulator.link.commands.modes import FlightModes
+from rig_emulator.link.commands.offboard_setpoints import OffboardSetpoints
+from rig_emulator.link.parameters.service import ParamService
+from rig_emulator.link.signing.policy import refuse_setup_signing
+from rig_emulator.link.telemetry.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
+from rig_emulator.link.telemetry.streams import StreamSchedule
+from rig_emulator.link.telemetry.context import TelemetryContext
 
 COMPID = M.MAV_COMP_ID_AUTOPILOT1
 HEARTBEAT_PERIOD_S = 1.0
@@ -276,7 +276,7 @@ class RigServer:
             channel.send(M.MAVLink_timesync_message(tc1=now_ns, ts1=msg.ts1))
 
     def _ftp(self, msg, channel: Channel) -> None:
-        """MAVFTP, read-only, serving the component metadata (:mod:`rig_emulator.link.ftp_server`)."""
+        """MAVFTP, read-only, serving the component metadata (:mod:`rig_emulator.link.ftp.server`)."""
         replies = self.ftp.handle(bytes(msg.payload), (id(channel.endpoint), channel.key))
         if replies is None:
             self.counters.drop("invalid")
@@ -298,7 +298,7 @@ class RigServer:
 
     def report_faults(self) -> None:
         """STATUSTEXT for new fault injections and detections; a HEARTBEAT at once when the
-        failsafe trips or clears (:mod:`rig_emulator.link.fault_report`)."""
+        failsafe trips or clears (:mod:`rig_emulator.link.telemetry.fault_report`)."""
         texts, failsafe_changed = self.fault_reporter.poll(self.rig)
         for severity, text in texts:
             self.statustext(None, severity, text)

@@ -12,7 +12,7 @@ from gcs_tools.cli import main
 from gcs_tools.missions import rectangle_points
 from gcs_tools.pytest_plugin import hilms_rig  # noqa: F401 - the fixture users get from the plugin
 from gcs_tools.tlog_read import iter_tlog
-from rig_emulator.link.testing import RigProcess, client_url
+from rig_emulator.testing.rig import RigProcess, client_url
 
 MAVLOGDUMP = os.path.join(os.path.dirname(sys.executable), "mavlogdump.py")
 RIG_HOME = "35.7,51.4,1200"  # the rig's default home: what a download writes back

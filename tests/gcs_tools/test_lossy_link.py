@@ -1,4 +1,4 @@
-"""rig-gcs over a bad link (issue 9 B): a UDP relay (rig_emulator.link.testing_relay) drops 20 % of
+"""rig-gcs over a bad link (issue 9 B): a UDP relay (rig_emulator.testing.relay) drops 20 % of
 the datagrams each way, duplicates 10 %, re-orders 10 % and delays each by 20-50 ms. Parameter
 download, parameter set and load, commands and mission transfer complete and are exactly right;
 over a dead link (100 % loss) each fails with a clear error after the protocol's retries."""
@@ -15,8 +15,8 @@ from gcs_tools.link import Link
 from gcs_tools.missions import mission_from_enu, rectangle_points
 from gcs_tools.params_client import ParamClient
 from protocol.dialect import mavlink as M
-from rig_emulator.link.testing import RigThread
-from rig_emulator.link.testing_relay import LossyRelay
+from rig_emulator.testing.rig import RigThread
+from rig_emulator.testing.relay import LossyRelay
 
 IMPAIRED = dict(drop=0.2, duplicate=0.1, reorder=0.1, delay_s=0.02, jitter_s=0.03)
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from gcs_tools.cli import main
-from rig_emulator.link.testing import RigThread, client_url
+from rig_emulator.testing.rig import RigThread, client_url
 
 
 @pytest.fixture(scope="module")

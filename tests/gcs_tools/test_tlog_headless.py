@@ -15,7 +15,7 @@ from gcs_tools.tlog_errors import tlog_mean_errors
 from gcs_tools.tlog_read import iter_tlog
 from protocol.mean_error import COLUMNS
 from rig_emulator.api import simulate as _simulate
-from rig_emulator.link.tlog_export import TlogWriter, export_tlog
+from rig_emulator.link.telemetry.tlog_export import TlogWriter, export_tlog
 
 # issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
 simulate = functools.partial(_simulate, airframe="hilms-ideal")

@@ -19,3 +19,13 @@ def test_every_jit_user_is_under_a_hashed_root():
 
 def test_cache_dir_is_keyed_on_the_sources():
     assert Path(_jit.CACHE_DIR).name == "numba-" + _jit._source_digest()
+
+
+def test_shared_logic_compiled_by_the_rig_is_hashed():
+    # protocol/ holds the waypoint logic as plain Python; the rig compiles it, so its source
+    # must key the cache like any compiled module's.
+    from rig_emulator.guidance import waypoint_switching as compiled
+
+    hashed = {p.resolve() for p in _jit.compiled_source_files()}
+    for dispatcher in (compiled.leg_duration, compiled.line_setpoint, compiled.waypoint_reached):
+        assert Path(dispatcher.py_func.__code__.co_filename).resolve() in hashed

@@ -7,7 +7,7 @@ import numba
 import numpy as np
 import pytest
 
-from protocol import waypoint_switching
+from rig_emulator.guidance import waypoint_switching
 from rig_emulator._jit import jit
 from rig_emulator.config.loader import load_config
 from rig_emulator.control import allocation, controller, fuzzy, pid, reference_filter, smc, supervisor

@@ -5,7 +5,7 @@ Frames: HIL_SENSOR's vectors are body FRD, which is the rig's body frame B, so t
 unchanged; positions and velocities are NED (``protocol.frames``) and geodetic about
 ``home`` (``protocol.geodesy.TangentPlane``); the attitude quaternion is R_NED_FRD. Units: HIL_SENSOR
 m/s^2, rad/s, gauss, hPa, m, degC; HIL_GPS and HIL_STATE_QUATERNION degE7, mm, cm/s,
-centidegrees, milli-g (:mod:`rig_emulator.link.mavlink_units`,
+centidegrees, milli-g (:mod:`rig_emulator.link.telemetry.units`,
 :mod:`rig_emulator.link.px4_simulator.hil_units`).
 """
 
@@ -16,7 +16,7 @@ import math
 from protocol.dialect import mavlink
 from protocol.frames import enu_to_ned_xyz, mavlink_quaternion_from_quat_wb
 from protocol.geodesy import TangentPlane
-from rig_emulator.link import mavlink_units as U
+from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.px4_simulator import hil_units as H
 
 #: the virtual GPS (ideal, as the rig's GPS_RAW_INT): 3D fix, 10 satellites, 0.3 m accuracy

@@ -1,7 +1,7 @@
 """Units of the Simulator MAVLink API's messages: the one place this link scales numbers.
 
 The generic SI -> MAVLink conversions (mm, cm/s, deg * 1e7, gauss, milli-g, microseconds)
-are :mod:`rig_emulator.link.mavlink_units`; this module adds the few the HIL messages need
+are :mod:`rig_emulator.link.telemetry.units`; this module adds the few the HIL messages need
 on top, and the actuator mapping (HIL_ACTUATOR_CONTROLS -> motor voltage).
 """
 

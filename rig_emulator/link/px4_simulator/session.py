@@ -28,8 +28,8 @@ import time
 
 from protocol.dialect import mavlink
 from protocol.geodesy import TangentPlane
-from rig_emulator.link.channel import saturate_floats
-from rig_emulator.link.counters import LinkCounters
+from rig_emulator.link.endpoints.channel import saturate_floats
+from rig_emulator.link.endpoints.counters import LinkCounters
 from rig_emulator.link.px4_simulator import hil_messages, hil_units
 
 SYSID = 1  # the simulator's MAVLink identity (PX4's simulator module ignores it)

@@ -17,7 +17,7 @@ import pytest
 from gcs_tools.cli import main
 from rig_emulator.api import simulate
 from rig_emulator.config.loader import load_config
-from rig_emulator.link.tlog_export import export_tlog
+from rig_emulator.link.telemetry.tlog_export import export_tlog
 
 SCENARIO, STRATEGY, DURATION, LOG_SEED, AIRFRAME = "hover-shocks", "flc", 8.0, 5, "hilms-ideal"
 HIDDEN_CONFIG = {"joint.cog_offset": [0.004, 0.0, 0.0], "motors.thrust_gain": [1.06, 1.0, 1.0, 1.0],

@@ -2,7 +2,7 @@
 
 import pytest
 
-from rig_emulator.link.testing import RigThread, connect
+from rig_emulator.testing.rig import RigThread, connect
 
 
 def pytest_configure(config):

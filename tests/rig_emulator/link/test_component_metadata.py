@@ -1,4 +1,4 @@
-"""Component metadata files (rig_emulator/link/component_metadata.py).
+"""Component metadata files (rig_emulator/link/ftp/component_metadata.py).
 
 The files are validated against mavlink's component_metadata/general.schema.json and
 parameter.schema.json with the ``jsonschema`` package when the schema files are available:
@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from rig_emulator.link.component_metadata import (GENERAL_PATH, PARAMETERS_PATH, crc32, general_metadata,
+from rig_emulator.link.ftp.component_metadata import (GENERAL_PATH, PARAMETERS_PATH, crc32, general_metadata,
                                                   metadata_files, parameter_metadata)
-from rig_emulator.link.params import ParamTable
+from rig_emulator.link.parameters.table import ParamTable
 
 SCHEMAS = os.environ.get("HILMS_MAVLINK_SCHEMAS")
 

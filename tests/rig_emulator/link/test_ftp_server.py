@@ -1,4 +1,4 @@
-"""The read-only MAVFTP server (rig_emulator/link/ftp_server.py), request by request."""
+"""The read-only MAVFTP server (rig_emulator/link/ftp/server.py), request by request."""
 
 import struct
 
@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rig_emulator.link import ftp_server as F
+from rig_emulator.link.ftp import server as F
 
 HEADER = struct.Struct("<HBBBBBBI")
 

@@ -17,7 +17,7 @@ from mavsdk.plugins.telemetry import Telemetry
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home, local_enu_to_global
 from rig_emulator.link.serve_args import DEFAULT_HOME
-from rig_emulator.link.testing import RigProcess, connect, recv
+from rig_emulator.testing.rig import RigProcess, connect, recv
 
 pytestmark = [pytest.mark.slow]
 SPEEDUP = 10

@@ -5,7 +5,7 @@ import time
 import pytest
 
 from protocol.dialect import mavlink as M
-from rig_emulator.link.testing import RigThread, command, connect, recv, recv_text
+from rig_emulator.testing.rig import RigThread, command, connect, recv, recv_text
 
 ACCEPTED, DENIED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED
 FAULT = M.MAV_CMD_HILMS_SENSOR_FAULT

@@ -8,8 +8,8 @@ import pytest
 
 from protocol.dialect import mavlink as M
 from protocol.mission_items import waypoint_items
-from rig_emulator.link.modes import AUTO, AUTO_LOITER, split_custom_mode
-from rig_emulator.link.testing import MissionClient, RigThread, command, connect, recv, recv_text
+from rig_emulator.link.commands.modes import AUTO, AUTO_LOITER, split_custom_mode
+from rig_emulator.testing.rig import MissionClient, RigThread, command, connect, recv, recv_text
 
 POS = M.POSITION_TARGET_TYPEMASK_X_IGNORE | M.POSITION_TARGET_TYPEMASK_Y_IGNORE | M.POSITION_TARGET_TYPEMASK_Z_IGNORE
 REST = (M.POSITION_TARGET_TYPEMASK_AX_IGNORE | M.POSITION_TARGET_TYPEMASK_AY_IGNORE | M.POSITION_TARGET_TYPEMASK_AZ_IGNORE

@@ -10,8 +10,8 @@ from pymavlink import mavutil
 from protocol.dialect import mavlink as M
 from protocol.geodesy import local_enu_to_global
 from protocol.mission_items import MissionItem
-from rig_emulator.link import modes as MD
-from rig_emulator.link.testing import MissionClient, RigThread, command, connect, recv, recv_text
+from rig_emulator.link.commands import modes as MD
+from rig_emulator.testing.rig import MissionClient, RigThread, command, connect, recv, recv_text
 
 ACCEPTED, DENIED, UNSUPPORTED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED
 NAN = math.nan

@@ -18,12 +18,12 @@ from protocol.dialect import mavlink as M
 from protocol.mission_items import validate_item
 from rig_emulator.config.loader import check_value, load_config
 from rig_emulator.config.schema import SCHEMA
-from rig_emulator.link.channel import Channel
+from rig_emulator.link.endpoints.channel import Channel
 from rig_emulator.link.serve import prepare_rig
 from rig_emulator.link.server import RigServer
-from rig_emulator.link.stream_table import ON_REQUEST, default_rates
-from rig_emulator.link.streams import StreamSchedule
-from rig_emulator.link.testing_fuzz import (
+from rig_emulator.link.telemetry.stream_table import ON_REQUEST, default_rates
+from rig_emulator.link.telemetry.streams import StreamSchedule
+from rig_emulator.testing.fuzz import (
     COMMANDS, FRAMES, HANDLED_TYPES, INT_RANGES, ITEM_COMMANDS, PARAM_NAMES, UNKNOWN_IDS, crc_of, expected_counts,
 )
 

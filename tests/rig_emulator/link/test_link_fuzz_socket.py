@@ -6,9 +6,9 @@ parameter read, counts every datagram exactly as a fresh pymavlink parser says i
 unhandled, bytes), no handler raises, and its step counter matches its simulated time. The
 rates before, during and after are printed (scripts measure speed, tests do not)."""
 
-from rig_emulator.link.link_status import status_values_names
-from rig_emulator.link.testing import RigProcess
-from rig_emulator.link.testing_fuzz_session import fuzz_rig
+from rig_emulator.link.telemetry.link_status import status_values_names
+from rig_emulator.testing.rig import RigProcess
+from rig_emulator.testing.fuzz_session import fuzz_rig
 
 
 def test_flood_over_udp_and_tcp_is_counted_exactly_and_the_rig_carries_on():

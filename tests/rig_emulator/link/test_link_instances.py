@@ -15,7 +15,7 @@ from protocol.dialect import mavlink as M
 from protocol.mission_items import MissionItem
 from rig_emulator.link.serve_args import instance_endpoints, instance_state_dir, instance_sysid
 from protocol.dialect import use_hilms_dialect
-from rig_emulator.link.testing import MissionClient, command, recv
+from rig_emulator.testing.rig import MissionClient, command, recv
 
 pytestmark = [pytest.mark.slow]
 INSTANCES = (41, 42, 43)

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from rig_emulator.link.params import ParamTable
-from rig_emulator.link.testing import RigProcess
+from rig_emulator.link.parameters.table import ParamTable
+from rig_emulator.testing.rig import RigProcess
 
 MAVPROXY = Path(sys.executable).parent / "mavproxy.py"
 pytestmark = [pytest.mark.slow]

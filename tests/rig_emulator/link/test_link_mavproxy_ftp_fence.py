@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from gcs_tools.cli import main as rig_gcs
-from rig_emulator.link.component_metadata import parameter_metadata
-from rig_emulator.link.params import ParamTable
-from rig_emulator.link.testing import RigThread
+from rig_emulator.link.ftp.component_metadata import parameter_metadata
+from rig_emulator.link.parameters.table import ParamTable
+from rig_emulator.testing.rig import RigThread
 
 from .test_link_mavproxy import MAVPROXY, _Lines
 

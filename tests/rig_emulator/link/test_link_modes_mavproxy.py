@@ -16,7 +16,7 @@ import pytest
 from pymavlink import mavutil
 
 from protocol.geodesy import local_enu_to_global
-from rig_emulator.link.testing import RigProcess, connect, recv
+from rig_emulator.testing.rig import RigProcess, connect, recv
 from rig_emulator.link.serve_args import DEFAULT_HOME
 from protocol.geodesy import Home
 

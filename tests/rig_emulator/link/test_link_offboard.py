@@ -11,8 +11,8 @@ import pytest
 
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home, local_enu_to_global
-from rig_emulator.link.modes import AUTO, AUTO_LOITER, OFFBOARD, split_custom_mode
-from rig_emulator.link.testing import RigThread, command, connect, recv, recv_text
+from rig_emulator.link.commands.modes import AUTO, AUTO_LOITER, OFFBOARD, split_custom_mode
+from rig_emulator.testing.rig import RigThread, command, connect, recv, recv_text
 
 POS = M.POSITION_TARGET_TYPEMASK_X_IGNORE | M.POSITION_TARGET_TYPEMASK_Y_IGNORE | M.POSITION_TARGET_TYPEMASK_Z_IGNORE
 VEL = M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMASK_VY_IGNORE | M.POSITION_TARGET_TYPEMASK_VZ_IGNORE

@@ -22,7 +22,7 @@ from mavsdk.plugins.offboard import AttitudeRate, Offboard, VelocityNedYaw  # no
 from mavsdk.plugins.param import Param  # noqa: E402
 from mavsdk.plugins.telemetry import Telemetry  # noqa: E402
 
-from rig_emulator.link.testing import RigProcess  # noqa: E402
+from rig_emulator.testing.rig import RigProcess  # noqa: E402
 
 pytestmark = [pytest.mark.slow]
 SPEEDUP = 5

@@ -2,7 +2,7 @@
 voltage and the current the motors draw (physics/electrical.py), not a constant."""
 
 from protocol.dialect import mavlink as M
-from rig_emulator.link.testing import RigThread, command, connect, recv
+from rig_emulator.testing.rig import RigThread, command, connect, recv
 from rig_emulator.physics.electrical import supply_current
 
 

@@ -5,7 +5,7 @@ import subprocess
 import sys
 
 from protocol.dialect import mavlink as M
-from rig_emulator.link.testing import RigProcess, command, connect, recv, udp_listener
+from rig_emulator.testing.rig import RigProcess, command, connect, recv, udp_listener
 
 
 def test_sigterm_and_sigint_exit_zero():

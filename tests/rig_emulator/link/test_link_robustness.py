@@ -7,7 +7,7 @@ import socket
 import pytest
 
 from protocol.dialect import mavlink as M
-from rig_emulator.link.testing import NAN, collect, command, count_in_window, recv, stamp_s
+from rig_emulator.testing.rig import NAN, collect, command, count_in_window, recv, stamp_s
 
 
 def _frame(msg, src=255):
@@ -55,7 +55,7 @@ def test_garbage_bad_crc_truncated_and_foreign_messages(rig, client):
 
 def test_udp_garbage_flood_and_new_peers():
     """Datagram garbage from many sources: counted, the rig keeps serving its TCP client."""
-    from rig_emulator.link.testing import RigThread, connect
+    from rig_emulator.testing.rig import RigThread, connect
 
     with RigThread(speedup=4.0, extra_endpoints=["udpin:127.0.0.1:0"]) as r:
         udp_url = next(u for u in r.urls if u.startswith("udpin:"))

@@ -9,12 +9,13 @@ from hypothesis import strategies as st
 
 from protocol.dialect import mavlink as M
 from protocol.frames import mavlink_quaternion_from_rwb, rwb_from_paper_euler
-from rig_emulator.link import ftp_server as ftp, mavlink_units as U
-from rig_emulator.link.commands import Command
-from rig_emulator.link.modes import AUTO, AUTO_MISSION, POSCTL, FlightModes, custom_mode, split_custom_mode
-from rig_emulator.link.offboard_setpoints import rwb_from_mavlink_quaternion
-from rig_emulator.link.streams import StreamSchedule
-from rig_emulator.link.telemetry_attitude import body_rates_from_paper_euler_rates
+from rig_emulator.link.ftp import server as ftp
+from rig_emulator.link.telemetry import units as U
+from rig_emulator.link.commands.command_long import Command
+from rig_emulator.link.commands.modes import AUTO, AUTO_MISSION, POSCTL, FlightModes, custom_mode, split_custom_mode
+from rig_emulator.link.commands.offboard_setpoints import rwb_from_mavlink_quaternion
+from rig_emulator.link.telemetry.streams import StreamSchedule
+from rig_emulator.link.telemetry.attitude import body_rates_from_paper_euler_rates
 from rig_emulator.physics.rotation import euler_rates_from_body_rates
 
 
@@ -100,7 +101,7 @@ def test_ftp_param_pck_gets_a_nak_with_the_next_seq():
 
 @pytest.mark.parametrize("spec", ["serial:/dev/ttyS0", "udpout:127.0.0.1", "tcpin:host:99999", "nonsense"])
 def test_bad_connection_strings_are_refused(spec):
-    from rig_emulator.link.endpoints import EndpointError, open_endpoint
+    from rig_emulator.link.endpoints.sockets import EndpointError, open_endpoint
 
     with pytest.raises(EndpointError):
         open_endpoint(spec)

@@ -11,7 +11,7 @@ import time
 import pytest
 
 from gcs_tools.px4_peer import StreamLink, fly
-from rig_emulator.link.testing import START_TIMEOUT_S, RigProcess
+from rig_emulator.testing.rig import START_TIMEOUT_S, RigProcess
 
 
 def _wait_line(rig, prefix: str, timeout: float = 60.0) -> str | None:

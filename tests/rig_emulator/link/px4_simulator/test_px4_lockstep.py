@@ -19,7 +19,7 @@ from rig_emulator.link.px4_simulator.server import Px4SimulatorServer
 from rig_emulator.link.px4_simulator.transport import open_transport
 from rig_emulator.link.server import RigServer
 from rig_emulator.link.serve import prepare_rig
-from rig_emulator.link.testing import connect, recv
+from rig_emulator.testing.rig import connect, recv
 from rig_emulator.simulation.lockstep import LockstepPlant
 
 HOME = Home(35.7, 51.4, 1200.0)

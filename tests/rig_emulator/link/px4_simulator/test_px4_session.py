@@ -13,7 +13,7 @@ from pymavlink.dialects.v20 import common
 
 from gcs_tools.px4_peer import StreamLink, fly
 from protocol.geodesy import Home
-from rig_emulator.link.counters import LinkCounters
+from rig_emulator.link.endpoints.counters import LinkCounters
 from rig_emulator.link.px4_simulator.server import Px4SimulatorServer
 from rig_emulator.link.px4_simulator.transport import open_transport
 from rig_emulator.simulation.hil_readout import HilReadout

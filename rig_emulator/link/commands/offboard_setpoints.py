@@ -1,0 +1,137 @@
+"""Offboard set-points (PX4's offboard interface) on the rig.
+
+* SET_POSITION_TARGET_LOCAL_NED in LOCAL_NED, LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED
+  and SET_POSITION_TARGET_GLOBAL_INT in GLOBAL_INT / GLOBAL_RELATIVE_ALT_INT: position,
+  velocity, acceleration, yaw and yaw rate, each component used unless its type_mask bit
+  ignores it (frames and bits read in :mod:`protocol.setpoint_frames`; guidance in
+  :mod:`rig_emulator.guidance.offboard`).
+* SET_ATTITUDE_TARGET: the attitude quaternion (R_NED_FRD) with the collective thrust
+  (``thrust`` 0..1 of the four motors' maximum; THROTTLE_IGNORE: the hover thrust), body
+  rates as feed-forward; with ATTITUDE_IGNORE the body rates are tracked (rate mode), an
+  ignored axis at 0 rad/s; a message that ignores attitude and rates but gives the thrust
+  changes only the thrust of the attitude or rate set-point being flown (as PX4 does).
+* SET_ACTUATOR_CONTROL_TARGET is refused: the rig's controllers always run (actuator-level
+  control belongs to the lockstep simulator interface).
+
+Every accepted set-point switches the reported mode to OFFBOARD and restarts the
+set-point timeout (:mod:`rig_emulator.link.commands.flight_monitors`). A set-point the rig cannot
+follow is refused: counted (``counters.dropped``) and, the first time each reason occurs
+on a link, reported to that peer with a STATUSTEXT saying why.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from protocol.dialect import mavlink as M
+from protocol.frames import T_NED_ENU, enu_to_ned, paper_euler_from_rwb
+from protocol.setpoint_frames import SetpointRefused, global_setpoint, local_setpoint
+from rig_emulator.link.commands.modes import OFFBOARD
+from rig_emulator.physics.rotation import quat_to_rot
+
+ATT_RATE_BITS = (M.ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE, M.ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE,
+                 M.ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE)
+THRUST_BODY_SET = getattr(M, "ATTITUDE_TARGET_TYPEMASK_THRUST_BODY_SET", 32)
+
+
+def rwb_from_mavlink_quaternion(q) -> np.ndarray:
+    """R_WB of a MAVLink attitude quaternion (w, x, y, z) of R_NED_FRD (normalised first)."""
+    w, x, y, z = (float(v) for v in q)
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    r = np.zeros((3, 3))
+    quat_to_rot(w / n, x / n, y / n, z / n, r)
+    return T_NED_ENU @ r
+
+
+class OffboardSetpoints:
+    """Handlers of the set-point messages for one server (``srv``: rig, modes, ctx.home,
+    counters, statustext)."""
+
+    def __init__(self, srv):
+        self.srv = srv
+        self.last_setpoint_s: float | None = None  # simulated time of the last accepted set-point
+        self.accepted = 0
+        self._reported: set = set()  # (channel id, message type, reason) already sent as STATUSTEXT
+
+    # --- outcome -------------------------------------------------------------------------------------
+    def _refuse(self, msg, channel, reason: str) -> None:
+        self.srv.counters.drop("setpoint_refused")
+        key = (id(channel), msg.get_type(), reason)
+        if key not in self._reported:
+            self._reported.add(key)
+            self.srv.statustext(channel, M.MAV_SEVERITY_WARNING, f"{msg.get_type()} refused: {reason}")
+
+    def _accepted(self) -> None:
+        self.accepted += 1
+        self.last_setpoint_s = self.srv.rig.time_s
+        if self.srv.modes.main != OFFBOARD:
+            self.srv.modes.note(OFFBOARD, 0)
+            self.srv.broadcast_heartbeat()
+
+    def _run(self, msg, channel, apply) -> None:
+        try:
+            apply()
+        except (SetpointRefused, ValueError) as exc:
+            self._refuse(msg, channel, str(exc))
+            return
+        self._accepted()
+
+    # --- messages ------------------------------------------------------------------------------------------
+    def position_local(self, msg, channel) -> None:
+        def apply():
+            snap = self.srv.snapshot()
+            yaw_ned = math.pi / 2.0 - snap.euler[2]  # paper psi -> MAVLink yaw (protocol/frames.py)
+            sp = local_setpoint(msg, enu_to_ned(snap.position), yaw_ned)
+            self._fly(sp)
+        self._run(msg, channel, apply)
+
+    def position_global(self, msg, channel) -> None:
+        self._run(msg, channel, lambda: self._fly(global_setpoint(msg, self.srv.ctx.home)))
+
+    def _fly(self, sp) -> None:
+        self.srv.rig.set_offboard_setpoint(position=sp.position, velocity=sp.velocity, acceleration=sp.acceleration,
+                                           yaw=sp.yaw, yaw_rate=sp.yaw_rate)
+
+    def attitude(self, msg, channel) -> None:
+        def apply():
+            mask = int(msg.type_mask)
+            if mask & THRUST_BODY_SET:
+                raise SetpointRefused("thrust_body (THRUST_BODY_SET) is not supported; send the collective thrust")
+            thrust = None if mask & M.ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE else float(msg.thrust)
+            if thrust is not None and not (math.isfinite(thrust) and 0.0 <= thrust <= 1.0):
+                raise SetpointRefused(f"thrust {thrust:g} must be in [0, 1] (the rig has no reverse thrust)")
+            rates_given = [not mask & b for b in ATT_RATE_BITS]
+            rates = [float(v) if given else 0.0 for v, given in
+                     zip((msg.body_roll_rate, msg.body_pitch_rate, msg.body_yaw_rate), rates_given)]
+            if not all(math.isfinite(v) for v in rates):
+                raise SetpointRefused("body rates must be finite numbers")
+            rig = self.srv.rig
+            if not mask & M.ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE:
+                q = [float(v) for v in msg.q]
+                norm = math.sqrt(sum(v * v for v in q)) if all(math.isfinite(v) for v in q) else math.nan
+                if not 0.5 < norm < 1.5:
+                    raise SetpointRefused(f"attitude quaternion norm {norm:.3g} is not ~1")
+                phi, theta, psi = paper_euler_from_rwb(rwb_from_mavlink_quaternion(q))
+                rig.set_attitude_target(phi, theta, psi, thrust_fraction=thrust,
+                                        body_rates=rates if any(rates_given) else None)
+            elif any(rates_given):
+                rig.set_body_rate_target(rates, thrust_fraction=thrust)
+            elif thrust is not None:
+                rig.set_collective_thrust(thrust)  # ValueError when no attitude/rate set-point is flown
+            else:
+                raise SetpointRefused("type_mask ignores attitude, body rates and thrust: nothing to follow")
+        self._run(msg, channel, apply)
+
+    def actuator_control(self, msg, channel) -> None:
+        self._refuse(msg, channel, "actuator-level control is not supported (the rig's controllers always run); "
+                                   "send SET_ATTITUDE_TARGET body rates and thrust")
+
+    def handlers(self) -> dict:
+        return {
+            "SET_POSITION_TARGET_LOCAL_NED": self.position_local,
+            "SET_POSITION_TARGET_GLOBAL_INT": self.position_global,
+            "SET_ATTITUDE_TARGET": self.attitude,
+            "SET_ACTUATOR_CONTROL_TARGET": self.actuator_control,
+        }

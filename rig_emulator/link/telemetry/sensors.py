@@ -1,0 +1,88 @@
+"""Sensor messages: one builder per message, ``(snapshot, ctx) -> message(s)``.
+
+Every value comes from :func:`rig_emulator.link.telemetry.ideal_sensors.sensor_readings` (through
+``ctx.readings``), so these builders do not change when the simulated sensors replace
+the ideal readings. Body axes are FRD in the rig and in MAVLink.
+"""
+
+from __future__ import annotations
+
+from protocol.dialect import mavlink
+from rig_emulator.link.telemetry import units as U
+
+HIGHRES_FIELDS_IMU = 0x1FF  # x/y/z acc, gyro and mag updated (HIGHRES_IMU.fields_updated bits 0..8)
+LOAD_CELL_NAMES = ("LC1_N", "LC2_N", "LC3_N", "LC4_N")  # NAMED_VALUE_FLOAT mirror: thrust per arm, N
+
+
+def _scaled(cls, snap, ctx, module: int):
+    r = ctx.readings(snap)
+    a, g, m = r.accel[module], r.gyro[module], r.mag[module]
+    return cls(
+        time_boot_ms=U.time_boot_ms(snap.time_s),
+        xacc=U.milli_g(a[0]), yacc=U.milli_g(a[1]), zacc=U.milli_g(a[2]),
+        xgyro=U.milli_rad_s(g[0]), ygyro=U.milli_rad_s(g[1]), zgyro=U.milli_rad_s(g[2]),
+        xmag=U.milli_gauss(m[0]), ymag=U.milli_gauss(m[1]), zmag=U.milli_gauss(m[2]), temperature=0)
+
+
+def scaled_imu(snap, ctx):
+    """IMU module 0."""
+    return _scaled(mavlink.MAVLink_scaled_imu_message, snap, ctx, 0)
+
+
+def scaled_imu2(snap, ctx):
+    """IMU module 1."""
+    return _scaled(mavlink.MAVLink_scaled_imu2_message, snap, ctx, 1)
+
+
+def scaled_imu3(snap, ctx):
+    """IMU module 2."""
+    return _scaled(mavlink.MAVLink_scaled_imu3_message, snap, ctx, 2)
+
+
+def highres_imu(snap, ctx):
+    """The fused IMU reading (SI: m/s^2, rad/s, gauss)."""
+    r = ctx.readings(snap)
+    a, g, m = r.fused_accel, r.fused_gyro, r.fused_mag
+    return mavlink.MAVLink_highres_imu_message(
+        time_usec=U.time_usec(snap.time_s), xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
+        xgyro=float(g[0]), ygyro=float(g[1]), zgyro=float(g[2]),
+        xmag=U.gauss(m[0]), ymag=U.gauss(m[1]), zmag=U.gauss(m[2]),
+        abs_pressure=0.0, diff_pressure=0.0, pressure_alt=0.0, temperature=0.0,
+        fields_updated=HIGHRES_FIELDS_IMU, id=0)
+
+
+def hilms_imu_module(snap, ctx):
+    """One HILMS_IMU_MODULE per module, raw counts in the module's axes."""
+    r = ctx.readings(snap)
+    out = []
+    for i, raw in enumerate(r.imu_raw_counts):
+        out.append(mavlink.MAVLink_hilms_imu_module_message(
+            time_usec=U.time_usec(snap.time_s), module_index=i,
+            gyro_raw=[U.raw_count_i16(c) for c in raw[0:3]], accel_raw=[U.raw_count_i16(c) for c in raw[3:6]],
+            mag_raw=[U.raw_count_i16(c) for c in raw[6:9]],
+            fault=int(r.imu_faults[i])))
+    return out
+
+
+def _load_health(snap, readings) -> int:
+    """Bit i: the cell of arm i + 1 is healthy (no injected fault, its readings not rejected by the guards)."""
+    f = snap.faults
+    if f is None or not f.cell_faults:
+        return sum(1 << i for i, ok in enumerate(readings.load_healthy) if ok)
+    return sum(1 << i for i, code in enumerate(f.cell_faults) if code == 0 and not (f.cells_flagged >> i) & 1)
+
+
+def hilms_load_cells(snap, ctx):
+    r = ctx.readings(snap)
+    return mavlink.MAVLink_hilms_load_cells_message(
+        time_usec=U.time_usec(snap.time_s), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts],
+        force_grf=[float(f) for f in r.load_force_grf], thrust_n=[float(f) for f in r.load_thrust_n],
+        health=_load_health(snap, r))
+
+
+def named_value_float(snap, ctx):
+    """HILMS_LOAD_CELLS for stock ground stations: filtered thrust per arm (N) as LC1_N..LC4_N."""
+    r = ctx.readings(snap)
+    t = U.time_boot_ms(snap.time_s)
+    return [mavlink.MAVLink_named_value_float_message(time_boot_ms=t, name=name.encode("ascii"), value=float(f))
+            for name, f in zip(LOAD_CELL_NAMES, r.load_thrust_n)]
