@@ -80,7 +80,7 @@ def test_lqr_attitude_behind_the_fuzzy_position_loop():
 
 
 def test_motor_thrust_plugin_holds_hover():
-    r = simulate("hover", duration=6.0, seed=1, controller=LevelHover)
+    r = simulate("hover", duration=6.0, seed=1, controller=LevelHover, airframe="hilms-ideal")  # Eq. 40 as the plug-in assumes
     assert np.degrees(np.abs(r.series["euler_true"][-100:, :2])).max() < 2.0
     assert abs(r.series["pos_true"][-1, 2] - r.config["guidance.hover_position"][2]) < 0.1
 

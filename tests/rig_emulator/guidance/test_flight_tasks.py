@@ -14,7 +14,7 @@ from rig_emulator.simulation.prearm import prearm_failure
 
 @pytest.fixture(scope="module")
 def rig():
-    return prepare_rig(load_config())
+    return prepare_rig(load_config(airframe="hilms-ideal"))  # the task logic, on the ideal plant
 
 
 def _run(rig, tasks, seconds, until=None):

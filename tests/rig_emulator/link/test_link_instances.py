@@ -9,6 +9,8 @@ import subprocess
 import sys
 
 import pytest
+
+from rig_emulator.testing.rig import TEST_AIRFRAME
 from pymavlink import mavutil
 
 from protocol.dialect import mavlink as M
@@ -36,7 +38,8 @@ def test_three_rigs_fly_their_own_missions_from_one_process(tmp_path):
     try:
         for n in INSTANCES:
             procs.append(subprocess.Popen(
-                [sys.executable, "-m", "rig_emulator", "serve", "--instance", str(n), "--speedup", "8"],
+                [sys.executable, "-m", "rig_emulator", "serve", "--instance", str(n), "--speedup", "8",
+                 "--airframe", TEST_AIRFRAME],
                 cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env))
         for n, proc in zip(INSTANCES, procs):
             lines = [proc.stdout.readline() for _ in range(3)]
