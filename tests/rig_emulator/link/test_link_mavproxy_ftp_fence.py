@@ -47,7 +47,11 @@ def test_mavproxy_ftp_fence_and_wp_load(tmp_path):
             assert got is not None and int(got.group(1)) == len(ParamTable()), "".join(out.all)
             do("ftp list /metadata", r"parameters\.json\s+(\d+)")
             local = tmp_path / "parameters.json"
-            do(f"ftp get /metadata/parameters.json {local}", r"Wrote (\d+) bytes")
+            wrote = do(f"ftp get /metadata/parameters.json {local}", r"Wrote (\d+) bytes")
+            # MAVProxy prints "Wrote N bytes" before its file buffer is flushed: wait for all N on disk
+            deadline = time.monotonic() + 20.0
+            while local.stat().st_size < int(wrote.group(1)) and time.monotonic() < deadline:
+                time.sleep(0.1)
             assert local.read_bytes() == parameter_metadata()
             entries = {p["name"]: p for p in json.loads(local.read_text())["parameters"]}
             assert [v["description"] for v in entries["CTL_STRATEGY"]["values"]] == ["smc-flc", "flc", "smc", "pid"]
