@@ -234,6 +234,9 @@ def test_set_current_by_message_and_command(conn):
 
 
 def test_item0_home_parameter(rig, conn):
+    # the module's rig may still fly the mission an earlier test started: disarm, back to POSCTL
+    assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 0).result == M.MAV_RESULT_ACCEPTED
+    assert command(conn, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 3, 0).result == M.MAV_RESULT_ACCEPTED
     conn.mav.param_set_send(1, 1, b"MIS_ITEM0_HOME", 1.0, M.MAV_PARAM_TYPE_REAL32)
     assert recv(conn, "PARAM_VALUE", 5, lambda m: m.param_id == "MIS_ITEM0_HOME" and m.param_value == 1.0)
     try:
