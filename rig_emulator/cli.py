@@ -35,7 +35,9 @@ from rig_emulator.link.serve_args import add_serve_args
 
 
 def _add_config_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--airframe", default="hilms", help="airframe preset (Table 2): %(default)s")
+    p.add_argument("--airframe", default="hilms",
+                   help=f"airframe preset (Table 2): {', '.join(available('airframes'))} (default: %(default)s, the "
+                        "hardware rig; hilms-ideal is the ideal plant)")
     p.add_argument("--config", action="append", default=[], metavar="FILE", help="extra TOML parameter file (repeatable)")
     p.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE",
@@ -103,6 +105,11 @@ def cmd_simulate(args) -> int:
     if args.controller:
         overrides["controller.plugin"] = args.controller
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
+    if args.omega is not None and not (cfg["guidance.type"] == "attitude"
+                                       and any(a != 0.0 for a in cfg["guidance.amplitude_deg"])):
+        raise ConfigError(f"--omega: scenario {args.scenario!r} flies no harmonic reference (Eq. 44), so --omega would "
+                          "change nothing; it applies to 'harmonic' (or guidance.type = 'attitude' with a non-zero "
+                          "guidance.amplitude_deg)")
     out = Path(args.out) if args.out else None
     start = _parse_start_time(args.start_time)
     if out is not None and out.suffix == ".tlog":

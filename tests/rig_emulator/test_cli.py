@@ -61,3 +61,23 @@ def test_simulate_with_a_fault_reports_the_failsafe_and_bad_events_exit_2(capsys
     bad = 'faults.events=[{t=1.0, sensor="load_cell", index=0, mode="dead", magnitude=0.0}]'
     assert main(["simulate", "--scenario", "hover", "--set", bad]) == 2
     assert "faults.events[0]: load cell 0: must be 1..4" in capsys.readouterr().err
+
+
+def test_omega_outside_a_harmonic_scenario_exits_2(capsys):
+    from rig_emulator.cli import main
+
+    assert main(["simulate", "--scenario", "hover", "--omega", "1.2", "--duration", "0.1"]) == 2
+    assert "--omega" in capsys.readouterr().err
+    assert main(["simulate", "--scenario", "harmonic", "--omega", "1.2", "--duration", "0.1"]) == 0
+
+
+def test_airframe_help_lists_every_preset(capsys):
+    import pytest as _pytest
+
+    from rig_emulator.cli import main
+
+    with _pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    text = " ".join(capsys.readouterr().out.split()).replace("- ", "-")  # argparse wraps at hyphens
+    for name in ("hilms", "hilms-ideal", "os4", "draganflyer"):
+        assert name in text
