@@ -223,6 +223,8 @@ def cmd_serve(args) -> int:
     from rig_emulator.link.serve import cmd_serve as serve
 
     overrides = _overrides(args)
+    if args.strategy is not None:
+        overrides["control.strategy"] = args.strategy
     if args.controller:
         overrides["controller.plugin"] = args.controller
     return serve(args, overrides)
@@ -280,6 +282,8 @@ def build_parser() -> argparse.ArgumentParser:
                                      "the mission in ./rig-state; optional MAVLink 2 signing (see serve --help)")
     add_serve_args(p)
     _add_config_args(p)
+    p.add_argument("--strategy", choices=STRATEGIES, default=None,
+                   help="controller strategy (default: the configuration's control.strategy, smc-flc)")
     p.add_argument("--controller", metavar="MODULE:NAME",
                    help="fly a controller plug-in instead of (part of) the strategy; its parameters are served "
                         "under its prefix; a failing plug-in trips the failsafe (docs/YOUR_CONTROLLER.md)")

@@ -40,3 +40,13 @@ def test_bad_options_exit_two():
                               capture_output=True, text=True, timeout=120)
         assert proc.returncode == 2, (args, proc.stdout, proc.stderr)
         assert "error" in proc.stderr
+
+
+def test_serve_strategy_option_sets_the_running_strategy():
+    from rig_emulator.config.schema import STRATEGIES
+
+    with RigProcess(speedup=2, args=["--strategy", "flc", "--no-persist"]) as rig:
+        conn = connect(rig.tcp_url)
+        conn.mav.param_request_read_send(1, 1, b"CTL_STRATEGY", -1)
+        pv = recv(conn, "PARAM_VALUE", 10, lambda m: m.param_id == "CTL_STRATEGY")
+        assert pv is not None and int(pv.param_value) == STRATEGIES.index("flc")
