@@ -235,6 +235,15 @@ def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, co
     for i in range(4):
         cstate[CS_THRUST + i] = forces[i]
         v_cmd[i] = voltage_for_thrust(forces[i], cp.k_v, cp.v_max)
+    record_decision(forces, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cout)
+    return flags
+
+
+@jit(nrt=False)
+def record_decision(forces, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cout):
+    """Record in ``cout`` what the controller decided: u1..u4 of the motor thrusts ``forces``
+    (A6), the attitude references, the sliding surfaces ``s3`` and the flags (shared by the
+    built-in laws and the per-motor plug-in path)."""
     cout[OUT_U] = forces[0] + forces[1] + forces[2] + forces[3]
     cout[OUT_U + 1] = cp.arm_length * (forces[3] - forces[1])
     cout[OUT_U + 2] = cp.arm_length * (forces[0] - forces[2])
@@ -249,4 +258,3 @@ def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, co
     cout[OUT_S + 1] = s3[1]
     cout[OUT_S + 2] = s3[2]
     cout[OUT_FLAGS] = flags
-    return flags

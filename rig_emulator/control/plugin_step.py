@@ -22,15 +22,11 @@ from numba import types
 from rig_emulator._jit import jit
 from rig_emulator.control.allocation import euler_torque_to_body
 from rig_emulator.control.controller import (
+    record_decision,
     CS_STARTED,
     CS_THRUST,
     MODE_POSITION,
-    OUT_ATT_DES,
-    OUT_ATT_RATE_DES,
-    OUT_FLAGS,
-    OUT_S,
     OUT_THRUST_CMD,
-    OUT_U,
     OUT_UXY,
     REF_MODE,
     actuate,
@@ -165,19 +161,7 @@ def plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, d
         v_cmd[i] = v
         forces[i] = thrust_from_voltage(v, cp.k_v, cp.f_max)
         cstate[CS_THRUST + i] = forces[i]
-    cout[OUT_U] = forces[0] + forces[1] + forces[2] + forces[3]
-    cout[OUT_U + 1] = cp.arm_length * (forces[3] - forces[1])
-    cout[OUT_U + 2] = cp.arm_length * (forces[0] - forces[2])
-    cout[OUT_U + 3] = cp.km_over_kf * (forces[0] - forces[1] + forces[2] - forces[3])
-    cout[OUT_ATT_DES] = r0
-    cout[OUT_ATT_DES + 1] = r1
-    cout[OUT_ATT_DES + 2] = r2
-    cout[OUT_ATT_RATE_DES] = dr0
-    cout[OUT_ATT_RATE_DES + 1] = dr1
-    cout[OUT_ATT_RATE_DES + 2] = dr2
-    for i in range(3):
-        cout[OUT_S + i] = math.nan
-    cout[OUT_FLAGS] = flags
+    record_decision(forces, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cout)  # s3 is NaN here
     return True
 
 

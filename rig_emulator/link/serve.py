@@ -26,6 +26,7 @@ the Fig. 19 rectangle this way).
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 
@@ -37,6 +38,7 @@ from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
 from rig_emulator.link.serve_args import MAX_INSTANCE, instance_endpoints, instance_sysid, instance_state_dir
 from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args
 from rig_emulator.link.server import RigServer
+from rig_emulator.physics.hardware import rest_attitude
 from rig_emulator.simulation.live import LiveRig
 
 
@@ -92,6 +94,10 @@ def _log(text: str) -> None:
 def _serve(args, overrides: dict, state, signing) -> int:
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
     rig = prepare_rig(cfg)
+    rest = rest_attitude(rig.sim.pp.hw, rig.sim.pp.g, math.radians(cfg["initial.euler_deg"][2]))
+    if rest is not None:
+        _log(f"disarmed, the rig hangs at roll {math.degrees(rest[0]):.1f} deg, pitch {math.degrees(rest[1]):.1f} deg "
+             f"on its joint (its centre of gravity is off the joint; arming levels it)")
     try:
         server = RigServer(rig, args.mavlink or instance_endpoints(args.instance), sysid=args.sysid, home=args.home,
                            speedup=args.speedup, chunk_s=chunk_seconds(args.chunk_ms, args.speedup),

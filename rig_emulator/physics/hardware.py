@@ -131,6 +131,38 @@ def cog_gravity_torque(R, hw, g):
             m[0] * fy - m[1] * fx)
 
 
+def rest_attitude(hw, g, psi=0.0):
+    """The attitude ``(phi, theta)`` (rad) at which a disarmed rig hangs still with yaw ``psi``:
+    where :func:`cog_gravity_torque` vanishes with the centre of gravity straight below the
+    joint (the stable equilibrium of the pendulum, Eq. 3 with no thrust). ``None`` when the
+    centre of gravity is on the joint (any attitude is at rest: the ideal plant) or above it
+    (no hanging rest: the rig tips over to its mechanical stop). Found numerically from level
+    with this module's own torque, so it holds whatever the frame conventions."""
+    from scipy.optimize import least_squares
+
+    from rig_emulator.physics.rotation import quat_from_euler, quat_to_rot
+
+    if not hw.cog_on:
+        return None
+    q = np.zeros(4)
+    R = np.zeros((3, 3))
+
+    def rotation(a):
+        quat_from_euler(a[0], a[1], psi, q)
+        quat_to_rot(q[0], q[1], q[2], q[3], R)
+        return R
+
+    def torque(a):
+        return np.array(cog_gravity_torque(rotation(a), hw, g))
+
+    sol = least_squares(torque, np.zeros(2), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    r = hw.cog_moment / np.linalg.norm(hw.cog_moment)
+    if not (np.max(np.abs(torque(sol.x))) < 1e-9 and rotation(sol.x)[2] @ r < -0.999
+            and max(abs(sol.x[0]), abs(sol.x[1])) < 0.5 * math.pi):
+        return None  # the equilibrium found is not the hanging one: the CoG is above the joint
+    return float(sol.x[0]), float(sol.x[1])
+
+
 # --- motors -------------------------------------------------------------------------------
 
 
@@ -221,21 +253,31 @@ def _normal(state):
 
 
 @jit(inline="always")
-def torque_noise_step(hw):
+def torque_noise_step(x, pp):
     """Advance the random body torque by one physics step (held over the step, Eq. 3).
 
     Prop wash of the four rotors on the arms and the drag of the sensor and power cables
-    act as a random torque: first-order coloured noise with corner
+    in that wash act as a random torque: first-order coloured noise with corner
     ``disturbance.torque_noise_corner_hz`` and standard deviation
-    ``disturbance.torque_noise`` per body axis, ``n_k = a n_{k-1} + b sigma w_k``
-    (``a = exp(-2 pi f_c dt)``, ``b = sqrt(1 - a^2)``), ``w_k`` standard normal from a
-    splitmix64 stream seeded by ``sim.seed``. Magnitude: a few per cent of the hover
-    torque authority; the paper's Fig. 12 traces wander by about 0.5-1 deg between shocks.
+    ``disturbance.torque_noise`` per body axis at hover,
+    ``n_k = a n_{k-1} + b sigma L_k w_k`` (``a = exp(-2 pi f_c dt)``,
+    ``b = sqrt(1 - a^2)``), ``w_k`` standard normal from a splitmix64 stream seeded by
+    ``sim.seed``. ``L_k``, the rotor load, is the motors' thrust by Eq. 40 over the hover
+    thrust ``m g`` (the wash's dynamic pressure grows with the induced velocity squared, i.e.
+    with thrust): the torque is ``sigma`` at hover and dies out with the filter's time constant
+    once the motors stop, so a disarmed rig hangs still on its joint. Magnitude: a few per
+    cent of the hover torque authority; the paper's Fig. 12 traces wander by about
+    0.5-1 deg between shocks. ``x`` is the rig state (motor voltages in ``x[13:17]``),
+    ``pp`` the PhysicsParams.
     """
+    hw = pp.hw
     if not hw.noise_on:
         return
+    # the rotor load from the motor voltages through Eq. 40 (an estimate of the wash's size,
+    # which keeps this per-step function free of the true curve's powers)
+    load = pp.k_v * (x[13] + x[14] + x[15] + x[16]) / (pp.mass * pp.g)
     a = hw.noise_a
-    b = hw.noise_b
+    b = hw.noise_b * load
     for i in range(3):
         hw.noise_torque[i] = a * hw.noise_torque[i] + b * hw.noise_sigma[i] * _normal(hw.rng)
 

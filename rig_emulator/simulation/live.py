@@ -21,8 +21,8 @@ from rig_emulator.guidance.offboard import (OFB_ATT, OFB_ACC, OFB_KIND, OFB_KIND
 from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, OFFBOARD,
                                           WAYPOINTS, start_at)
 from rig_emulator._jit import jit
-from rig_emulator.physics.hardware import motor_thrust
-from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed
+from rig_emulator.physics import state as S
+from rig_emulator.physics.hardware import motor_thrust, rest_attitude
 from rig_emulator.physics.electrical import supply_current
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
@@ -191,8 +191,11 @@ class LiveRig:
         """``controller``, ``external_motors``: see :class:`~rig_emulator.simulation.run.Simulation`."""
         self.sim = Simulation(cfg, log_capacity=chunk_steps_max + 1, controller=controller,
                               external_motors=external_motors)
+        self._controller_arg = controller  # kept for reboot()
+        self._external_motors = external_motors
         self.chunk_steps_max = chunk_steps_max
         self.sim.armed = False
+        self._power_on()
         self._snap_values = np.zeros(SNAPSHOT_SIZE)
         self._calibrations = 0
         self._mission = None  # (waypoints, radii, holds, speeds, free_xy) stored
@@ -231,6 +234,25 @@ class LiveRig:
 
     def warm_up(self) -> float:
         return self.sim.warm_up()
+
+    def _power_on(self) -> None:
+        """The state of a hardware rig just switched on, disarmed: when its centre of gravity
+        is off the joint (``joint.cog_offset``) it hangs still at its rest attitude
+        (:func:`~rig_emulator.physics.hardware.rest_attitude`; the ``hilms`` airframe: about
+        13 deg roll and pitch) with the initial yaw, its motors stopped: it has long since
+        swung there on the bench. A rig with no hanging rest (``hilms-ideal``: any attitude is
+        at rest) keeps the headless scenarios' initial state (``initial.euler_deg``, motors at
+        the hover voltage), so a served flight started at t = 0 retraces the headless one."""
+        sim = self.sim
+        psi = math.radians(sim.cfg["initial.euler_deg"][2])
+        rest = rest_attitude(sim.pp.hw, sim.pp.g, psi)
+        if rest is None:
+            return
+        quat_from_euler(rest[0], rest[1], psi, sim.x[S.QUAT : S.QUAT + 4])
+        sim.x[S.OMEGA : S.OMEGA + 3] = 0.0
+        sim.x[S.MOTOR_V : S.MOTOR_V + 4] = 0.0
+        sim.v_cmd[:] = 0.0
+        sim.pp.hw.cmd_buf[:] = 0.0
 
     # --- observing -----------------------------------------------------------------------
     def snapshot(self) -> RigSnapshot:
@@ -609,12 +631,15 @@ class LiveRig:
 
     def reboot(self) -> None:
         """Restart the simulation from the configuration's initial state (time 0, disarmed,
-        faults and disturbances injected by command cleared), keeping the current parameters
-        and the stored mission: what MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN does to a flight
-        controller, without restarting the process."""
+        faults and disturbances injected by command cleared), keeping the current parameters,
+        the controller plug-in and the stored mission: what MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN
+        does to a flight controller, without restarting the process. Like at power-on, the
+        rig is disarmed with its motors stopped, hanging at rest (:meth:`_power_on`)."""
         cfg = self.sim.cfg
-        self.sim = Simulation(cfg, log_capacity=self.chunk_steps_max + 1)
+        self.sim = Simulation(cfg, log_capacity=self.chunk_steps_max + 1, controller=self._controller_arg,
+                              external_motors=self._external_motors)
         self.sim.armed = False
+        self._power_on()
         self.sim.warm_up()
         self._flying = None
         self._path_kind = None

@@ -158,7 +158,7 @@ def _run_steps(
             log_row += 1
         # issue 13: the command reaches the motors through the ESC chain (delay, quantisation,
         # dead-band; v_cmd itself in the ideal plant), the random body torque is held over the step
-        torque_noise_step(pp.hw)
+        torque_noise_step(x, pp)
         rk4_step(t, dt, x, actuator_chain(k, v_cmd, pp.hw), pp, wind, gusts, shocks, extra, work, R)
     return log_row
 

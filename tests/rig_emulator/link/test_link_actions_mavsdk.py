@@ -52,7 +52,7 @@ def test_mavsdk_actions_fly_the_rig():
         except ActionError as exc:
             results[name] = f"ActionError: {exc}"
 
-    with RigProcess(speedup=SPEEDUP, extra_endpoints=["udpin:127.0.0.1:0"]) as rig:
+    with RigProcess(speedup=SPEEDUP, extra_endpoints=["udpin:127.0.0.1:0"], airframe=None) as rig:
         udp_port = next(u for u in rig.urls if u.startswith("udpin:")).rsplit(":", 1)[1]
         obs = connect(rig.tcp_url)
         sdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))

@@ -104,26 +104,38 @@ def test_actuator_chain_delays_by_whole_steps_quantises_and_dead_bands():
     assert actuator_chain(0, cmd, ideal) is cmd
 
 
-def test_torque_noise_has_the_configured_std_and_correlation_and_is_seeded():
-    def series(seed, n=40000):
-        hw = physics_params(IDEAL.with_overrides({"disturbance.torque_noise": [0.05, 0.0, 0.01],
-                                                  "disturbance.torque_noise_corner_hz": 2.0,
-                                                  "sim.seed": seed})).hw
-        out = np.zeros((n, 3))
-        for i in range(n):
-            torque_noise_step(hw)
-            out[i] = hw.noise_torque
-        return out, hw
+def _noise_series(seed, n=40000, hover=True, start=None):
+    pp = physics_params(IDEAL.with_overrides({"disturbance.torque_noise": [0.05, 0.0, 0.01],
+                                              "disturbance.torque_noise_corner_hz": 2.0,
+                                              "sim.seed": seed}))
+    x = np.zeros(S.SIZE)
+    if hover:
+        x[S.MOTOR_V : S.MOTOR_V + 4] = pp.mass * pp.g / 4.0 / pp.k_v
+    if start is not None:
+        pp.hw.noise_torque[:] = start
+    out = np.zeros((n, 3))
+    for i in range(n):
+        torque_noise_step(x, pp)
+        out[i] = pp.hw.noise_torque
+    return out, pp.hw
 
-    a, hw = series(4)
+
+def test_torque_noise_has_the_configured_std_at_hover_and_correlation_and_is_seeded():
+    a, hw = _noise_series(4)
     assert a[:, 0].std() == pytest.approx(0.05, rel=0.2)
     assert a[:, 2].std() == pytest.approx(0.01, rel=0.2)
     assert np.all(a[:, 1] == 0.0)
     lag = a[1:, 0] @ a[:-1, 0] / (a[:, 0] @ a[:, 0])
     assert lag == pytest.approx(hw.noise_a, abs=0.01)  # first-order: one-step correlation exp(-2 pi fc dt)
-    b, _ = series(4)
-    c, _ = series(5)
+    b, _ = _noise_series(4)
+    c, _ = _noise_series(5)
     assert np.array_equal(a, b) and not np.array_equal(a, c)
+
+
+def test_torque_noise_dies_out_with_the_filter_once_the_motors_stop():
+    a, hw = _noise_series(4, n=2000, hover=False, start=[0.05, 0.0, 0.01])
+    assert a[0, 0] == pytest.approx(0.05 * hw.noise_a)  # no new drive with the rotors stopped
+    assert np.all(np.abs(a[-1]) < 1e-6)  # decays as a^k (2 Hz corner: 1 s = 12.6 time constants)
 
 
 def test_frame_vibration_is_at_the_blade_pass_frequency_with_the_hover_amplitude():
