@@ -54,6 +54,9 @@ HardwareParams = namedtuple(
         "curve_n",         # exponent of the true motor curve (1: Eq. 40)
         "curve_vp",        # pivot voltage where the true curve meets Eq. 40, V
         "curve_fp",        # pivot thrust, N
+        "curve_c",         # (4,) binomial coefficients C(n, 1..4): the curve's Taylor series within a step
+        "curve_ref",       # (3, 4) per motor: voltage, true-curve thrust there (N), 1 / voltage (a cache;
+                           # :func:`motor_thrust` refreshes it, :func:`motor_thrust_in_step` reads it)
         "act_on",          # bool: delay, quantisation or dead-band present
         "delay_steps",     # int: sensing-to-actuation delay in physics steps
         "cmd_buf",         # (delay_steps + 1, 4) ring buffer of voltage commands
@@ -79,7 +82,17 @@ HardwareParams = namedtuple(
 def neutral_arrays():
     """State arrays of a plant with no effects (shape-compatible with any HardwareParams)."""
     return dict(cmd_buf=np.zeros((1, 4)), cmd_out=np.zeros(4), noise_torque=np.zeros(3),
-                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4))
+                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4), curve_ref=np.zeros((3, 4)))
+
+
+def curve_series(n: float) -> np.ndarray:
+    """The binomial coefficients ``C(n, 1..4)`` of ``(1 + e)^n`` (:func:`motor_thrust_in_step`)."""
+    c = np.empty(4)
+    b = 1.0
+    for k in range(1, 5):
+        b *= (n - k + 1) / k
+        c[k - 1] = b
+    return c
 
 
 # --- joint --------------------------------------------------------------------------------
@@ -182,11 +195,63 @@ def motor_thrust(v, i, k_v, f_ceiling, efficiency, hw):
     * ``hw.bias``: a common additive thrust bias of a running motor (``motors.thrust_bias_grf``);
     * ``efficiency``: a motor fault's share (sensors/faults.py);
     * clipped to ``[0, f_ceiling]`` (850 gr.F, Sec. 3-2).
+
+    Speed (issue 13): the power is the plant's most expensive operation. Its last value per
+    motor is kept in ``hw.curve_ref`` and reused, bit for bit, while the voltage is the same
+    (the sensors, the vibration, the log and the first RK4 stage of a step all ask at the
+    step's voltage); :func:`motor_thrust_in_step` reads it for the later stages.
     """
     if hw.curve_n == 1.0 or v <= 0.0:
         f = k_v * v
     else:
-        f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+        ref = hw.curve_ref
+        if v == ref[0, i]:
+            f = ref[1, i]
+        else:
+            f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+            ref[0, i] = v
+            ref[1, i] = f
+            ref[2, i] = 1.0 / v
+    return _thrust_chain(f, v, i, f_ceiling, efficiency, hw)
+
+
+#: largest relative voltage change within a step that :func:`motor_thrust_in_step` takes to its
+#: series (beyond it the power is evaluated): the series' error is below |C(n, 5)| e^5 / (1 - e),
+#: 1.2e-12 of the thrust for any n in 1..3
+CURVE_SERIES_MAX = 0.01
+
+
+@jit(inline="always")
+def motor_thrust_in_step(v, i, k_v, f_ceiling, efficiency, hw):
+    """:func:`motor_thrust` at an RK4 stage's voltage ``v`` within a physics step.
+
+    The motor voltage moves within a step (the motors' lag, ``motors.time_constant``), so each
+    RK4 stage needs the true curve at its own voltage. From the curve at the step's voltage
+    ``V_0`` (``hw.curve_ref``, exact), ``F_p (V / V_p)^n = F(V_0) (1 + e)^n`` with
+    ``e = (V - V_0) / V_0``, summed to ``e^4`` (``hw.curve_c``): at a 50 ms motor lag and 1 kHz
+    physics ``|e|`` is 2 % of the command's distance from the voltage at most, typically below
+    1e-3, where the series is exact to rounding. The first stage (``e = 0``) is exactly
+    :func:`motor_thrust`; beyond :data:`CURVE_SERIES_MAX` (start-up, a cut) the power itself.
+    """
+    if hw.curve_n == 1.0 or v <= 0.0:
+        f = k_v * v
+    else:
+        ref = hw.curve_ref
+        if v == ref[0, i]:
+            f = ref[1, i]
+        else:
+            e = (v - ref[0, i]) * ref[2, i]
+            if ref[0, i] > 0.0 and -CURVE_SERIES_MAX <= e <= CURVE_SERIES_MAX:
+                c = hw.curve_c
+                f = ref[1, i] * (1.0 + e * (c[0] + e * (c[1] + e * (c[2] + e * c[3]))))
+            else:
+                f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+    return _thrust_chain(f, v, i, f_ceiling, efficiency, hw)
+
+
+@jit(inline="always")
+def _thrust_chain(f, v, i, f_ceiling, efficiency, hw):
+    """The rest of :func:`motor_thrust` after the curve: bias, clip, motor gain, fault share."""
     if hw.bias != 0.0 and v > 0.0:
         f += hw.bias
     if f < 0.0:

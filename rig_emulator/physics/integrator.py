@@ -17,6 +17,9 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     if p.tau_motor <= 0.0:
         for i in range(4):
             x[13 + i] = v_cmd[i]
+    if p.hw.curve_n != 1.0:  # the true motor curve at the step's voltages, for every stage (hardware.py)
+        for i in range(4):
+            motor_thrust(x[13 + i], i, p.k_v, p.f_ceiling, p.thrust_efficiency[i], p.hw)
     k1 = work[0]
     k2 = work[1]
     k3 = work[2]
