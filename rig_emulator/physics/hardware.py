@@ -56,7 +56,9 @@ HardwareParams = namedtuple(
         "curve_fp",        # pivot thrust, N
         "curve_c",         # (4,) binomial coefficients C(n, 1..4): the curve's Taylor series within a step
         "curve_ref",       # (3, 4) per motor: voltage, true-curve thrust there (N), 1 / voltage (a cache;
-                           # :func:`motor_thrust` refreshes it, :func:`motor_thrust_in_step` reads it)
+                           # :func:`motor_thrust` and :func:`motor_curve_advance` refresh it,
+                           # :func:`motor_thrust_in_step` reads it)
+        "curve_turn",      # (1,) int: the motor whose curve :func:`motor_curve_advance` evaluates exactly next
         "act_on",          # bool: delay, quantisation or dead-band present
         "delay_steps",     # int: sensing-to-actuation delay in physics steps
         "cmd_buf",         # (delay_steps + 1, 4) ring buffer of voltage commands
@@ -82,7 +84,8 @@ HardwareParams = namedtuple(
 def neutral_arrays():
     """State arrays of a plant with no effects (shape-compatible with any HardwareParams)."""
     return dict(cmd_buf=np.zeros((1, 4)), cmd_out=np.zeros(4), noise_torque=np.zeros(3),
-                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4), curve_ref=np.zeros((3, 4)))
+                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4), curve_ref=np.zeros((3, 4)),
+                curve_turn=np.zeros(1, dtype=np.int64))
 
 
 def curve_series(n: float) -> np.ndarray:
@@ -197,9 +200,10 @@ def motor_thrust(v, i, k_v, f_ceiling, efficiency, hw):
     * clipped to ``[0, f_ceiling]`` (850 gr.F, Sec. 3-2).
 
     Speed (issue 13): the power is the plant's most expensive operation. Its last value per
-    motor is kept in ``hw.curve_ref`` and reused, bit for bit, while the voltage is the same
-    (the sensors, the vibration, the log and the first RK4 stage of a step all ask at the
-    step's voltage); :func:`motor_thrust_in_step` reads it for the later stages.
+    motor is kept in ``hw.curve_ref`` and reused while the voltage is the same (the sensors,
+    the vibration, the log and the first RK4 stage of a step all ask at the step's voltage);
+    :func:`motor_curve_advance` fills it for the next step, :func:`motor_thrust_in_step` reads
+    it for the RK4 stages.
     """
     if hw.curve_n == 1.0 or v <= 0.0:
         f = k_v * v
@@ -219,6 +223,13 @@ def motor_thrust(v, i, k_v, f_ceiling, efficiency, hw):
 #: series (beyond it the power is evaluated): the series' error is below |C(n, 5)| e^5 / (1 - e),
 #: 1.2e-12 of the thrust for any n in 1..3
 CURVE_SERIES_MAX = 0.01
+
+
+@jit(inline="always")
+def _curve_series(e, hw, i):
+    """``F(V_0) (1 + e)^n`` from the cached curve of motor ``i`` (``hw.curve_ref``), summed to ``e^4``."""
+    c = hw.curve_c
+    return hw.curve_ref[1, i] * (1.0 + e * (c[0] + e * (c[1] + e * (c[2] + e * c[3]))))
 
 
 @jit(inline="always")
@@ -242,11 +253,41 @@ def motor_thrust_in_step(v, i, k_v, f_ceiling, efficiency, hw):
         else:
             e = (v - ref[0, i]) * ref[2, i]
             if ref[0, i] > 0.0 and -CURVE_SERIES_MAX <= e <= CURVE_SERIES_MAX:
-                c = hw.curve_c
-                f = ref[1, i] * (1.0 + e * (c[0] + e * (c[1] + e * (c[2] + e * c[3]))))
+                f = _curve_series(e, hw, i)
             else:
                 f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
     return _thrust_chain(f, v, i, f_ceiling, efficiency, hw)
+
+
+@jit(inline="always")
+def motor_curve_advance(x, hw):
+    """After a physics step: the true curve at the motors' new voltages ``x[13:17]``, cached for
+    the next step (its sensors, log, vibration and RK4 stages then all reuse it).
+
+    From the curve at the step's start by the series of :func:`motor_thrust_in_step` (the
+    voltage moved by at most 2 % of the command's distance), except for one motor a step in
+    turn, whose power is evaluated: every motor's cached curve is exact every fourth step, so
+    the series' rounding cannot accumulate (at most three chained series, each exact to
+    rounding below ``|e|`` = 1e-3 and to 1.2e-12 at :data:`CURVE_SERIES_MAX`). A voltage out of
+    the series' range, or 0 V, is evaluated (or skipped) as in :func:`motor_thrust`.
+    """
+    if hw.curve_n == 1.0:
+        return
+    ref = hw.curve_ref
+    turn = hw.curve_turn[0]
+    hw.curve_turn[0] = turn + 1 if turn < 3 else 0
+    for i in range(4):
+        v = x[13 + i]
+        if v <= 0.0 or v == ref[0, i]:
+            continue
+        e = (v - ref[0, i]) * ref[2, i]
+        if i != turn and ref[0, i] > 0.0 and -CURVE_SERIES_MAX <= e <= CURVE_SERIES_MAX:
+            f = _curve_series(e, hw, i)
+        else:
+            f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+        ref[0, i] = v
+        ref[1, i] = f
+        ref[2, i] = 1.0 / v
 
 
 @jit(inline="always")
@@ -283,7 +324,9 @@ def actuator_chain(k, v_cmd, hw):
     row = k % n
     for j in range(4):
         buf[row, j] = v_cmd[j]
-    src = (k - hw.delay_steps) % n
+    src = row - hw.delay_steps  # (k - delay) mod n with one integer division a step
+    if src < 0:
+        src += n
     out = hw.cmd_out
     for j in range(4):
         v = buf[src, j]

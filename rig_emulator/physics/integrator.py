@@ -1,7 +1,7 @@
 """Fixed-step fourth-order Runge-Kutta for the rig state, and the virtual ground."""
 
 from rig_emulator._jit import jit
-from rig_emulator.physics.hardware import motor_thrust
+from rig_emulator.physics.hardware import motor_curve_advance, motor_thrust
 from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import quat_normalize
 
@@ -39,6 +39,7 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     for i in range(n):
         x[i] += sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     quat_normalize(x[6:10])
+    motor_curve_advance(x, p.hw)  # the true motor curve at the new voltages, for the next step
     if p.ground and x[2] <= 0.0:
         apply_ground(x, p)
 

@@ -100,6 +100,7 @@ def hardware_params(cfg: RigConfig, k_v: float, dt: float, previous: HardwarePar
         curve_fp=pivot,
         curve_c=curve_series(cfg["motors.curve_exponent"]),
         curve_ref=np.zeros((3, 4)),  # a cache of the curve (never carried over: it depends on the curve's keys)
+        curve_turn=np.zeros(1, dtype=np.int64),
         act_on=act_on,
         delay_steps=delay_steps,
         cmd_buf=cmd_buf,
