@@ -16,6 +16,17 @@ compile):
 
 Ratios are this tree over the base, per repetition (the two run back to back), median over
 repetitions. Wall-clock figures on a loaded machine are noisy: quote them with the load.
+
+**Which plant.** Both trees fly the same plant: ``--airframe ideal`` (the default) is the ideal
+plant in each tree (``hilms-ideal`` where the tree has it, else ``hilms``, which was the ideal
+plant before issue 13), so an A/B across the issue-13 commits does not compare the hardware
+rig with the ideal one. ``--airframe hilms`` (repeatable) names an airframe both trees have.
+
+**Which commits.** The plug-in machinery alone (issue 16) is ``--base 3f19de9 --this a324065``
+(the h16-plugin branch from its first commit to its last before it merged main); ``HEAD``
+against 3f19de9 also carries everything merged since (the hardware plant, the link work). The
+same A/B measures a speed change of the step loop: ``--base f83dea3 --airframe hilms
+--airframe ideal --strategies smc-flc`` (issue 13's hardware rig before and after s5-speed).
 """
 
 from __future__ import annotations
@@ -34,21 +45,28 @@ BASE = "3f19de9"
 STRATEGIES = ("smc-flc", "flc", "smc", "pid")
 
 _PROBE = r"""
-import json, sys, time
+import json, os, sys, time
 t0 = time.perf_counter()
 from rig_emulator.api import simulate
 import rig_emulator
 t1 = time.perf_counter()
-simulate("helix", strategy="smc-flc", duration=0.01, seed=0)
+presets = os.path.join(os.path.dirname(rig_emulator.__file__), "presets", "airframes")
+def airframe(name):  # "ideal": the tree's ideal plant (hilms was ideal before issue 13 added hilms-ideal)
+    if name != "ideal":
+        return name
+    return "hilms-ideal" if os.path.exists(os.path.join(presets, "hilms-ideal.toml")) else "hilms"
+airframes = sys.argv[3].split(",")
+simulate("helix", strategy="smc-flc", duration=0.01, seed=0, airframe=airframe(airframes[0]))
 first = time.perf_counter() - t1
 out = {"tree": rig_emulator.__file__, "import_s": t1 - t0, "first_call_s": first}
-for s in sys.argv[2].split(","):
-    rtfs = []
-    for _ in range(3):
-        r = simulate("helix", strategy=s, duration=float(sys.argv[1]), seed=0)
-        rtfs.append(r.sim_time_s / r.wall_time_s)
-    rtfs.sort()
-    out["rtf." + s] = rtfs[1]
+for a in airframes:
+    for s in sys.argv[2].split(","):
+        rtfs = []
+        for _ in range(3):
+            r = simulate("helix", strategy=s, duration=float(sys.argv[1]), seed=0, airframe=airframe(a))
+            rtfs.append(r.sim_time_s / r.wall_time_s)
+        rtfs.sort()
+        out[f"rtf.{a}.{s}"] = rtfs[1]
 print(json.dumps(out))
 """
 
@@ -65,9 +83,10 @@ def _export(commit: str, repo: Path, dest: Path) -> Path:
     return tree
 
 
-def _run(tree: Path, cache: Path, duration: float) -> dict:
+def _run(tree: Path, cache: Path, duration: float, strategies, airframes) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree), HILMS_NUMBA_CACHE=str(cache), NUMBA_CACHE_DIR=str(cache))
-    p = subprocess.run([sys.executable, "-c", _PROBE, str(duration), ",".join(STRATEGIES)], env=env, cwd=tree,
+    p = subprocess.run([sys.executable, "-c", _PROBE, str(duration), ",".join(strategies), ",".join(airframes)],
+                       env=env, cwd=tree,
                        capture_output=True, text=True, check=False)
     if p.returncode != 0:
         raise RuntimeError(f"probe on {tree} failed:\n{p.stderr[-2000:]}")
@@ -80,8 +99,13 @@ def main(argv=None) -> int:
     ap.add_argument("--this", default="HEAD", help="the commit measured (default %(default)s)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--duration", type=float, default=20.0, help="simulated s per steady-state call")
+    ap.add_argument("--airframe", action="append", dest="airframes",
+                    help="airframe both trees fly ('ideal': each tree's ideal plant; repeatable; default ideal)")
+    ap.add_argument("--strategies", default=",".join(STRATEGIES), help="comma list (default %(default)s)")
     ap.add_argument("--out", help="write the raw runs as JSON")
     args = ap.parse_args(argv)
+    airframes = args.airframes or ["ideal"]
+    strategies = args.strategies.split(",")
     repo = Path(__file__).resolve().parent.parent
     runs = {"base": [], "this": []}
     with tempfile.TemporaryDirectory(prefix="hilms-ab-") as tmp:
@@ -89,24 +113,27 @@ def main(argv=None) -> int:
         trees = {"base": _export(args.base, repo, tmp / "base"), "this": _export(args.this, repo, tmp / "this")}
         for rep in range(args.repeat):
             for name in (("base", "this") if rep % 2 == 0 else ("this", "base")):
-                r = _run(trees[name], tmp / f"cache-{name}", args.duration)
+                r = _run(trees[name], tmp / f"cache-{name}", args.duration, strategies, airframes)
                 runs[name].append(r)
                 print(f"rep {rep + 1} {name}: " + ", ".join(f"{k} {v:.3g}" for k, v in r.items() if k != "tree"),
                       file=sys.stderr, flush=True)
     with open("/proc/loadavg") if os.path.exists("/proc/loadavg") else open(os.devnull) as f:
         load = f.read().strip()
-    print(f"A/B: {args.this} vs {args.base}, {args.repeat} repetitions, load average {load}")
+    print(f"A/B: {args.this} vs {args.base}, {args.repeat} repetitions, airframes {', '.join(airframes)}, "
+          f"load average {load}")
     cold = runs["this"][0]["first_call_s"] / runs["base"][0]["first_call_s"]
     print(f"cold compile + first call: {runs['this'][0]['first_call_s']:.1f} s vs {runs['base'][0]['first_call_s']:.1f} s"
           f" (ratio {cold:.3f}; target <= 1.10)")
     if args.repeat > 1:
         warm = [t["first_call_s"] / b["first_call_s"] for t, b in zip(runs["this"][1:], runs["base"][1:])]
         print(f"warm start (cache load) ratio: median {statistics.median(warm):.3f}")
-    for s in STRATEGIES:
-        ratios = [t[f"rtf.{s}"] / b[f"rtf.{s}"] for t, b in zip(runs["this"], runs["base"])]
-        print(f"{s}: real-time factor {statistics.median(t[f'rtf.{s}'] for t in runs['this']):.0f}x vs "
-              f"{statistics.median(b[f'rtf.{s}'] for b in runs['base']):.0f}x, ratio median "
-              f"{statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
+    for a in airframes:
+        for s in strategies:
+            key = f"rtf.{a}.{s}"
+            ratios = [t[key] / b[key] for t, b in zip(runs["this"], runs["base"])]
+            print(f"{a} {s}: real-time factor {statistics.median(t[key] for t in runs['this']):.0f}x vs "
+                  f"{statistics.median(b[key] for b in runs['base']):.0f}x, ratio median "
+                  f"{statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
     if args.out:
         Path(args.out).write_text(json.dumps(runs, indent=1))
     return 0
