@@ -7,6 +7,7 @@ module here.
 """
 
 from . import rotorpy_reference, rig_core  # noqa: F401  (registration side effects)
+from . import hardware_rig  # noqa: F401
 from . import flc_vs_skfuzzy  # noqa: F401
 from . import cf_vs_ahrs  # noqa: F401
 from . import mavlink_link, jitter, memory  # noqa: F401
