@@ -241,8 +241,9 @@ def motor_thrust_in_step(v, i, k_v, f_ceiling, efficiency, hw):
     ``V_0`` (``hw.curve_ref``, exact), ``F_p (V / V_p)^n = F(V_0) (1 + e)^n`` with
     ``e = (V - V_0) / V_0``, summed to ``e^5`` (``hw.curve_c``): at a 50 ms motor lag and 1 kHz
     physics ``|e|`` is 2 % of the command's distance from the voltage at most (the helix: median
-    2.7e-3, 99.9th percentile 1.2e-2), where the series is exact to rounding. The first stage (``e = 0``) is exactly
-    :func:`motor_thrust`; beyond :data:`CURVE_SERIES_MAX` (start-up, a cut) the power itself.
+    2.7e-3, 99.9th percentile 1.2e-2), where the series is exact to rounding. The first stage
+    (``e = 0``) is exactly :func:`motor_thrust`; beyond :data:`CURVE_SERIES_MAX` (start-up, a
+    cut) the power itself.
     """
     if hw.curve_n == 1.0 or v <= 0.0:
         f = k_v * v
@@ -268,8 +269,8 @@ def motor_curve_advance(x, hw):
     voltage moved by at most 2 % of the command's distance), except for one motor a step in
     turn, whose power is evaluated: every motor's cached curve is exact every fourth step, so
     the series' rounding cannot accumulate (at most three chained series, each exact to
-    rounding, 5e-15 at worst, see :data:`CURVE_SERIES_MAX`). A voltage out of
-    the series' range, or 0 V, is evaluated (or skipped) as in :func:`motor_thrust`.
+    rounding, 5e-15 at worst, see :data:`CURVE_SERIES_MAX`). A voltage out of the series'
+    range is evaluated, 0 V skipped, as in :func:`motor_thrust`.
     """
     if hw.curve_n == 1.0:
         return
