@@ -12,7 +12,8 @@ compile):
   10 % more;
 * **warm start**: the same in later repetitions (cache load);
 * **steady state**: the real-time factor of ``simulate("helix", strategy, duration)`` for the
-  four built-in strategies (median of three calls) - the issue asks for no cost.
+  four built-in strategies (median of ``--calls`` calls, default three) - the issue asks for no
+  cost; and the best call over all repetitions (on a busy machine the least disturbed one).
 
 Ratios are this tree over the base, per repetition (the two run back to back), median over
 repetitions. Wall-clock figures on a loaded machine are noisy: quote them with the load.
@@ -62,11 +63,12 @@ out = {"tree": rig_emulator.__file__, "import_s": t1 - t0, "first_call_s": first
 for a in airframes:
     for s in sys.argv[2].split(","):
         rtfs = []
-        for _ in range(3):
+        for _ in range(int(sys.argv[4])):
             r = simulate("helix", strategy=s, duration=float(sys.argv[1]), seed=0, airframe=airframe(a))
             rtfs.append(r.sim_time_s / r.wall_time_s)
         rtfs.sort()
-        out[f"rtf.{a}.{s}"] = rtfs[1]
+        out[f"rtf.{a}.{s}"] = rtfs[len(rtfs) // 2]
+        out[f"best.{a}.{s}"] = rtfs[-1]
 print(json.dumps(out))
 """
 
@@ -83,9 +85,10 @@ def _export(commit: str, repo: Path, dest: Path) -> Path:
     return tree
 
 
-def _run(tree: Path, cache: Path, duration: float, strategies, airframes) -> dict:
+def _run(tree: Path, cache: Path, duration: float, strategies, airframes, calls: int = 3) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree), HILMS_NUMBA_CACHE=str(cache), NUMBA_CACHE_DIR=str(cache))
-    p = subprocess.run([sys.executable, "-c", _PROBE, str(duration), ",".join(strategies), ",".join(airframes)],
+    p = subprocess.run([sys.executable, "-c", _PROBE, str(duration), ",".join(strategies), ",".join(airframes),
+                        str(calls)],
                        env=env, cwd=tree,
                        capture_output=True, text=True, check=False)
     if p.returncode != 0:
@@ -102,6 +105,9 @@ def main(argv=None) -> int:
     ap.add_argument("--airframe", action="append", dest="airframes",
                     help="airframe both trees fly ('ideal': each tree's ideal plant; repeatable; default ideal)")
     ap.add_argument("--strategies", default=",".join(STRATEGIES), help="comma list (default %(default)s)")
+    ap.add_argument("--calls", type=int, default=3,
+                    help="steady-state calls per airframe and strategy in each process: their median and their "
+                         "best (the least disturbed, for a busy machine) are reported (default %(default)s)")
     ap.add_argument("--out", help="write the raw runs as JSON")
     args = ap.parse_args(argv)
     airframes = args.airframes or ["ideal"]
@@ -113,7 +119,7 @@ def main(argv=None) -> int:
         trees = {"base": _export(args.base, repo, tmp / "base"), "this": _export(args.this, repo, tmp / "this")}
         for rep in range(args.repeat):
             for name in (("base", "this") if rep % 2 == 0 else ("this", "base")):
-                r = _run(trees[name], tmp / f"cache-{name}", args.duration, strategies, airframes)
+                r = _run(trees[name], tmp / f"cache-{name}", args.duration, strategies, airframes, args.calls)
                 runs[name].append(r)
                 print(f"rep {rep + 1} {name}: " + ", ".join(f"{k} {v:.3g}" for k, v in r.items() if k != "tree"),
                       file=sys.stderr, flush=True)
@@ -134,6 +140,11 @@ def main(argv=None) -> int:
             print(f"{a} {s}: real-time factor {statistics.median(t[key] for t in runs['this']):.0f}x vs "
                   f"{statistics.median(b[key] for b in runs['base']):.0f}x, ratio median "
                   f"{statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
+            best = f"best.{a}.{s}"
+            if all(best in r for r in runs["this"] + runs["base"]):
+                bt = max(t[best] for t in runs["this"])
+                bb = max(b[best] for b in runs["base"])
+                print(f"{a} {s}: best call of all repetitions {bt:.0f}x vs {bb:.0f}x, ratio {bt / bb:.3f}")
     if args.out:
         Path(args.out).write_text(json.dumps(runs, indent=1))
     return 0
