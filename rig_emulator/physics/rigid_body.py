@@ -40,12 +40,10 @@ def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
 
     eff = p.thrust_efficiency  # 1 = healthy; a motor fault lowers it (sensors/faults.py)
     hw = p.hw
-    for i in range(4):  # dx[13:17] holds the thrusts until the motor lag's derivatives go there
-        dx[13 + i] = motor_thrust_in_step(x[13 + i], i, p.k_v, p.f_ceiling, eff[i], hw)
-    f1 = dx[13]
-    f2 = dx[14]
-    f3 = dx[15]
-    f4 = dx[16]
+    f1 = motor_thrust_in_step(x[13], 0, p.k_v, p.f_ceiling, eff[0], hw)
+    f2 = motor_thrust_in_step(x[14], 1, p.k_v, p.f_ceiling, eff[1], hw)
+    f3 = motor_thrust_in_step(x[15], 2, p.k_v, p.f_ceiling, eff[2], hw)
+    f4 = motor_thrust_in_step(x[16], 3, p.k_v, p.f_ceiling, eff[3], hw)
     u1 = f1 + f2 + f3 + f4
     u2 = p.arm_length * (f4 - f2)
     u3 = p.arm_length * (f1 - f3)
