@@ -212,11 +212,17 @@ def motor_thrust(v, i, k_v, f_ceiling, efficiency, hw):
         if v == ref[0, i]:
             f = ref[1, i]
         else:
-            f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+            f = _curve_power(v, hw.curve_vp, hw.curve_fp, hw.curve_n)
             ref[0, i] = v
             ref[1, i] = f
             ref[2, i] = 1.0 / v
     return _thrust_chain(f, v, i, f_ceiling, efficiency, hw)
+
+
+@jit(nrt=False)  # a call, not inlined: the power is rare in the loop and small call sites compile faster
+def _curve_power(v, v_p, f_p, n):
+    """The true motor curve ``F_p (V / V_p)^n`` (:func:`motor_thrust`)."""
+    return f_p * (v / v_p) ** n
 
 
 #: largest relative voltage change within a step that :func:`motor_thrust_in_step` takes to its
@@ -256,7 +262,7 @@ def motor_thrust_in_step(v, i, k_v, f_ceiling, efficiency, hw):
             if ref[0, i] > 0.0 and -CURVE_SERIES_MAX <= e <= CURVE_SERIES_MAX:
                 f = _curve_series(e, hw, i)
             else:
-                f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+                f = _curve_power(v, hw.curve_vp, hw.curve_fp, hw.curve_n)
     return _thrust_chain(f, v, i, f_ceiling, efficiency, hw)
 
 
@@ -285,7 +291,7 @@ def motor_curve_advance(x, hw):
         if i != turn and ref[0, i] > 0.0 and -CURVE_SERIES_MAX <= e <= CURVE_SERIES_MAX:
             f = _curve_series(e, hw, i)
         else:
-            f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
+            f = _curve_power(v, hw.curve_vp, hw.curve_fp, hw.curve_n)
         ref[0, i] = v
         ref[1, i] = f
         ref[2, i] = 1.0 / v
