@@ -238,6 +238,22 @@ def test_rig_core_summary_targets():
     assert metrics["hover: first call, warm numba cache"].value == 0.7
 
 
+
+def test_hardware_rig_summary_pairs_the_two_plants():
+    from benchmarks.hardware_rig import HILMS, IDEAL, hardware_rig
+
+    run = {"rtf": 520.0, "us_per_step": 1.9, "first_call_s": 80.0}
+    stats = {HILMS: ProbeStats(HILMS, [dict(run), {**run, "rtf": 400.0, "first_call_s": 0.8}]),
+             IDEAL: ProbeStats(IDEAL, [{**run, "rtf": 650.0, "first_call_s": 79.0}, {**run, "rtf": 500.0}])}
+    metrics = {m.name: m for m in hardware_rig(stats)}
+    rtf = metrics["hilms: real-time factor"]
+    assert rtf.value == 460.0 and not rtf.targets[0].met(rtf.value) and rtf.targets[0].met(520.0)
+    ratio = metrics["hilms speed / hilms-ideal speed"]
+    assert ratio.value == pytest.approx(0.8) and ratio.reference == IDEAL  # 520/650 and 400/500, paired
+    assert metrics["hilms: first call, cold numba cache"].value == 80.0
+    assert metrics["hilms-ideal: first call, cold numba cache"].value == 79.0
+    assert metrics["hilms: first call, warm numba cache"].value == 0.8
+
 # -- end to end: fresh subprocesses, interleaving, failures, report, JSON ---------------------
 
 
