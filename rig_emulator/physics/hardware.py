@@ -54,11 +54,6 @@ HardwareParams = namedtuple(
         "curve_n",         # exponent of the true motor curve (1: Eq. 40)
         "curve_vp",        # pivot voltage where the true curve meets Eq. 40, V
         "curve_fp",        # pivot thrust, N
-        "curve_c",         # (5,) binomial coefficients C(n, 1..5): the curve's Taylor series within a step
-        "curve_ref",       # (3, 4) per motor: voltage, true-curve thrust there (N), 1 / voltage (a cache;
-                           # :func:`motor_thrust` and :func:`motor_curve_advance` refresh it,
-                           # :func:`motor_thrust_in_step` reads it)
-        "curve_turn",      # (1,) int: the motor whose curve :func:`motor_curve_advance` evaluates exactly next
         "act_on",          # bool: delay, quantisation or dead-band present
         "delay_steps",     # int: sensing-to-actuation delay in physics steps
         "cmd_buf",         # (delay_steps + 1, 4) ring buffer of voltage commands
@@ -84,18 +79,7 @@ HardwareParams = namedtuple(
 def neutral_arrays():
     """State arrays of a plant with no effects (shape-compatible with any HardwareParams)."""
     return dict(cmd_buf=np.zeros((1, 4)), cmd_out=np.zeros(4), noise_torque=np.zeros(3),
-                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4), curve_ref=np.zeros((3, 4)),
-                curve_turn=np.zeros(1, dtype=np.int64))
-
-
-def curve_series(n: float) -> np.ndarray:
-    """The binomial coefficients ``C(n, 1..5)`` of ``(1 + e)^n`` (:func:`motor_thrust_in_step`)."""
-    c = np.empty(5)
-    b = 1.0
-    for k in range(1, 6):
-        b *= (n - k + 1) / k
-        c[k - 1] = b
-    return c
+                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4))
 
 
 # --- joint --------------------------------------------------------------------------------
@@ -198,108 +182,11 @@ def motor_thrust(v, i, k_v, f_ceiling, efficiency, hw):
     * ``hw.bias``: a common additive thrust bias of a running motor (``motors.thrust_bias_grf``);
     * ``efficiency``: a motor fault's share (sensors/faults.py);
     * clipped to ``[0, f_ceiling]`` (850 gr.F, Sec. 3-2).
-
-    Speed (issue 13): the power is the plant's most expensive operation. Its last value per
-    motor is kept in ``hw.curve_ref`` and reused while the voltage is the same (the sensors,
-    the vibration, the log and the first RK4 stage of a step all ask at the step's voltage);
-    :func:`motor_curve_advance` fills it for the next step, :func:`motor_thrust_in_step` reads
-    it for the RK4 stages.
     """
     if hw.curve_n == 1.0 or v <= 0.0:
         f = k_v * v
     else:
-        ref = hw.curve_ref
-        if v == ref[0, i]:
-            f = ref[1, i]
-        else:
-            f = _curve_power(v, hw.curve_vp, hw.curve_fp, hw.curve_n)
-            ref[0, i] = v
-            ref[1, i] = f
-            ref[2, i] = 1.0 / v
-    return _thrust_chain(f, v, i, f_ceiling, efficiency, hw)
-
-
-@jit(nrt=False)  # a call, not inlined: the power is rare in the loop and small call sites compile faster
-def _curve_power(v, v_p, f_p, n):
-    """The true motor curve ``F_p (V / V_p)^n`` (:func:`motor_thrust`)."""
-    return f_p * (v / v_p) ** n
-
-
-#: largest relative voltage change within a step that :func:`motor_thrust_in_step` takes to its
-#: series (beyond it the power is evaluated): the series' error is below |C(n, 6)| e^6 / (1 - e),
-#: 5e-15 of the thrust for any n in 1..3 (at the |e| ~ 3e-3 of a flight, 4e-18: rounding)
-CURVE_SERIES_MAX = 0.01
-
-
-@jit(inline="always")
-def _curve_series(e, hw, i):
-    """``F(V_0) (1 + e)^n`` from the cached curve of motor ``i`` (``hw.curve_ref``), summed to ``e^5``."""
-    c = hw.curve_c
-    return hw.curve_ref[1, i] * (1.0 + e * (c[0] + e * (c[1] + e * (c[2] + e * (c[3] + e * c[4])))))
-
-
-@jit(inline="always")
-def motor_thrust_in_step(v, i, k_v, f_ceiling, efficiency, hw):
-    """:func:`motor_thrust` at an RK4 stage's voltage ``v`` within a physics step.
-
-    The motor voltage moves within a step (the motors' lag, ``motors.time_constant``), so each
-    RK4 stage needs the true curve at its own voltage. From the curve at the step's voltage
-    ``V_0`` (``hw.curve_ref``, exact), ``F_p (V / V_p)^n = F(V_0) (1 + e)^n`` with
-    ``e = (V - V_0) / V_0``, summed to ``e^5`` (``hw.curve_c``): at a 50 ms motor lag and 1 kHz
-    physics ``|e|`` is 2 % of the command's distance from the voltage at most (the helix: median
-    2.7e-3, 99.9th percentile 1.2e-2), where the series is exact to rounding. The first stage
-    (``e = 0``) is exactly :func:`motor_thrust`; beyond :data:`CURVE_SERIES_MAX` (start-up, a
-    cut) the power itself.
-    """
-    if hw.curve_n == 1.0 or v <= 0.0:
-        f = k_v * v
-    else:
-        ref = hw.curve_ref
-        if v == ref[0, i]:
-            f = ref[1, i]
-        else:
-            e = (v - ref[0, i]) * ref[2, i]
-            if ref[0, i] > 0.0 and -CURVE_SERIES_MAX <= e <= CURVE_SERIES_MAX:
-                f = _curve_series(e, hw, i)
-            else:
-                f = _curve_power(v, hw.curve_vp, hw.curve_fp, hw.curve_n)
-    return _thrust_chain(f, v, i, f_ceiling, efficiency, hw)
-
-
-@jit(inline="always")
-def motor_curve_advance(x, hw):
-    """After a physics step: the true curve at the motors' new voltages ``x[13:17]``, cached for
-    the next step (its sensors, log, vibration and RK4 stages then all reuse it).
-
-    From the curve at the step's start by the series of :func:`motor_thrust_in_step` (the
-    voltage moved by at most 2 % of the command's distance), except for one motor a step in
-    turn, whose power is evaluated: every motor's cached curve is exact every fourth step, so
-    the series' rounding cannot accumulate (at most three chained series, each exact to
-    rounding, 5e-15 at worst, see :data:`CURVE_SERIES_MAX`). A voltage out of the series'
-    range is evaluated, 0 V skipped, as in :func:`motor_thrust`.
-    """
-    if hw.curve_n == 1.0:
-        return
-    ref = hw.curve_ref
-    turn = hw.curve_turn[0]
-    hw.curve_turn[0] = turn + 1 if turn < 3 else 0
-    for i in range(4):
-        v = x[13 + i]
-        if v <= 0.0 or v == ref[0, i]:
-            continue
-        e = (v - ref[0, i]) * ref[2, i]
-        if i != turn and ref[0, i] > 0.0 and -CURVE_SERIES_MAX <= e <= CURVE_SERIES_MAX:
-            f = _curve_series(e, hw, i)
-        else:
-            f = _curve_power(v, hw.curve_vp, hw.curve_fp, hw.curve_n)
-        ref[0, i] = v
-        ref[1, i] = f
-        ref[2, i] = 1.0 / v
-
-
-@jit(inline="always")
-def _thrust_chain(f, v, i, f_ceiling, efficiency, hw):
-    """The rest of :func:`motor_thrust` after the curve: bias, clip, motor gain, fault share."""
+        f = hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
     if hw.bias != 0.0 and v > 0.0:
         f += hw.bias
     if f < 0.0:
@@ -331,9 +218,7 @@ def actuator_chain(k, v_cmd, hw):
     row = k % n
     for j in range(4):
         buf[row, j] = v_cmd[j]
-    src = row - hw.delay_steps  # (k - delay) mod n with one integer division a step
-    if src < 0:
-        src += n
+    src = (k - hw.delay_steps) % n
     out = hw.cmd_out
     for j in range(4):
         v = buf[src, j]

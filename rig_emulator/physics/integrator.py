@@ -1,7 +1,7 @@
 """Fixed-step fourth-order Runge-Kutta for the rig state, and the virtual ground."""
 
 from rig_emulator._jit import jit
-from rig_emulator.physics.hardware import motor_curve_advance, motor_thrust
+from rig_emulator.physics.hardware import motor_thrust
 from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import quat_normalize
 
@@ -17,9 +17,6 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     if p.tau_motor <= 0.0:
         for i in range(4):
             x[13 + i] = v_cmd[i]
-    if p.hw.curve_n != 1.0:  # the true motor curve at the step's voltages, for every stage (hardware.py)
-        for i in range(4):
-            motor_thrust(x[13 + i], i, p.k_v, p.f_ceiling, p.thrust_efficiency[i], p.hw)
     k1 = work[0]
     k2 = work[1]
     k3 = work[2]
@@ -39,7 +36,6 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     for i in range(n):
         x[i] += sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     quat_normalize(x[6:10])
-    motor_curve_advance(x, p.hw)  # the true motor curve at the new voltages, for the next step
     if p.ground and x[2] <= 0.0:
         apply_ground(x, p)
 

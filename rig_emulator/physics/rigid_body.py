@@ -13,15 +13,14 @@
 * Motor faults (issue 9): motor i produces ``thrust_efficiency[i]`` (1 healthy, 0 dead) of
   Eq. 40's thrust; its rotor speed and reaction moment follow the thrust it produces.
 * Hardware effects (issue 13, :mod:`rig_emulator.physics.hardware`): each motor's true
-  thrust (:func:`~rig_emulator.physics.hardware.motor_thrust_in_step`: the true curve at the
-  stage's voltage), and joint friction, the
+  thrust (:func:`~rig_emulator.physics.hardware.motor_thrust`), and joint friction, the
   centre of gravity's offset from the pivot and the random body torque added to Eq. 3's
   torques (none of them in the ideal plant).
 """
 
 from rig_emulator._jit import jit
 from rig_emulator.physics.disturbances import extra_mass_effects, shock_torque, wind_force
-from rig_emulator.physics.hardware import cog_gravity_torque, joint_friction_torque, motor_thrust_in_step
+from rig_emulator.physics.hardware import cog_gravity_torque, joint_friction_torque, motor_thrust
 from rig_emulator.physics.motors import rotor_speed
 from rig_emulator.physics.rotation import quat_derivative, quat_to_rot
 
@@ -40,10 +39,10 @@ def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
 
     eff = p.thrust_efficiency  # 1 = healthy; a motor fault lowers it (sensors/faults.py)
     hw = p.hw
-    f1 = motor_thrust_in_step(x[13], 0, p.k_v, p.f_ceiling, eff[0], hw)
-    f2 = motor_thrust_in_step(x[14], 1, p.k_v, p.f_ceiling, eff[1], hw)
-    f3 = motor_thrust_in_step(x[15], 2, p.k_v, p.f_ceiling, eff[2], hw)
-    f4 = motor_thrust_in_step(x[16], 3, p.k_v, p.f_ceiling, eff[3], hw)
+    f1 = motor_thrust(x[13], 0, p.k_v, p.f_ceiling, eff[0], hw)
+    f2 = motor_thrust(x[14], 1, p.k_v, p.f_ceiling, eff[1], hw)
+    f3 = motor_thrust(x[15], 2, p.k_v, p.f_ceiling, eff[2], hw)
+    f4 = motor_thrust(x[16], 3, p.k_v, p.f_ceiling, eff[3], hw)
     u1 = f1 + f2 + f3 + f4
     u2 = p.arm_length * (f4 - f2)
     u3 = p.arm_length * (f1 - f3)

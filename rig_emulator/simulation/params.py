@@ -18,7 +18,7 @@ from rig_emulator.control import fuzzy
 from rig_emulator.control.strategies import laws
 from rig_emulator.guidance.offboard import OFB_SIZE
 from rig_emulator.guidance.runner import GUIDANCE_CODES
-from rig_emulator.physics.hardware import HardwareParams, curve_series
+from rig_emulator.physics.hardware import HardwareParams
 from rig_emulator.physics.motors import GRAM_FORCE_N
 
 PhysicsParams = namedtuple(
@@ -98,9 +98,6 @@ def hardware_params(cfg: RigConfig, k_v: float, dt: float, previous: HardwarePar
         curve_n=cfg["motors.curve_exponent"],
         curve_vp=pivot / k_v,
         curve_fp=pivot,
-        curve_c=curve_series(cfg["motors.curve_exponent"]),
-        curve_ref=np.zeros((3, 4)),  # a cache of the curve (never carried over: it depends on the curve's keys)
-        curve_turn=np.zeros(1, dtype=np.int64),
         act_on=act_on,
         delay_steps=delay_steps,
         cmd_buf=cmd_buf,

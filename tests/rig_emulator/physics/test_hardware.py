@@ -7,9 +7,8 @@ import pytest
 
 from rig_emulator.config.loader import load_config
 from rig_emulator.physics import state as S
-from rig_emulator.physics.hardware import (CURVE_SERIES_MAX, actuator_chain, cog_gravity_torque,
-                                           frame_vibration_step, joint_friction_torque, motor_curve_advance,
-                                           motor_thrust, motor_thrust_in_step, torque_noise_step)
+from rig_emulator.physics.hardware import (actuator_chain, cog_gravity_torque, frame_vibration_step,
+                                           joint_friction_torque, motor_thrust, torque_noise_step)
 from rig_emulator.physics.motors import GRAM_FORCE_N
 from rig_emulator.physics.rotation import quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, physics_params, smc_gains_si
@@ -89,74 +88,6 @@ def test_motor_gain_and_bias_scale_and_shift_the_thrust():
     assert motor_thrust(10.0, 0, pp.k_v, pp.f_ceiling, 0.0, pp.hw) == 0.0  # a dead motor (fault) none
 
 
-def _exact_curve(v, hw):
-    return hw.curve_fp * (v / hw.curve_vp) ** hw.curve_n
-
-
-def test_motor_curve_within_a_step_is_the_power_to_rounding_and_exact_at_the_steps_voltage():
-    pp = _pp(**{"motors.curve_exponent": 1.703})
-    hw = pp.hw
-    v0 = 11.7
-    f0 = motor_thrust(v0, 2, pp.k_v, pp.f_ceiling, 1.0, hw)  # evaluates the power, caches it
-    assert f0 == _exact_curve(v0, hw)
-    assert motor_thrust_in_step(v0, 2, pp.k_v, pp.f_ceiling, 1.0, hw) == f0  # the first RK4 stage: bit for bit
-    worst = 0.0
-    for e in np.linspace(-CURVE_SERIES_MAX, CURVE_SERIES_MAX, 201):
-        v = v0 * (1.0 + e)
-        f = motor_thrust_in_step(v, 2, pp.k_v, pp.f_ceiling, 1.0, hw)
-        worst = max(worst, abs(f / _exact_curve(v, hw) - 1.0))
-    assert worst < 1e-14  # the series' bound |C(n, 6)| e^6 is 5e-15 at 1 %
-    # beyond the series' range (start-up, a cut) the power itself; the cache stays at the step's voltage
-    assert motor_thrust_in_step(0.8 * v0, 2, pp.k_v, pp.f_ceiling, 1.0, hw) == _exact_curve(0.8 * v0, hw)
-    assert hw.curve_ref[0, 2] == v0
-    # gain, bias, clip and a fault's share apply as in motor_thrust
-    g = _pp(**{"motors.curve_exponent": 1.703, "motors.thrust_gain": [1.0, 1.0, 0.9, 1.0],
-               "motors.thrust_bias_grf": -50.0})
-    motor_thrust(v0, 2, g.k_v, g.f_ceiling, 1.0, g.hw)
-    v = v0 * 1.003
-    expect = 0.5 * 0.9 * (_exact_curve(v, g.hw) - 50.0 * GRAM_FORCE_N)
-    assert motor_thrust_in_step(v, 2, g.k_v, g.f_ceiling, 0.5, g.hw) == pytest.approx(expect, rel=1e-12)
-
-
-def test_motor_curve_cache_follows_the_voltages_without_accumulating_error():
-    pp = _pp(**{"motors.curve_exponent": 2.4})
-    hw = pp.hw
-    rng = np.random.default_rng(3)
-    x = np.zeros(S.SIZE)
-    v = np.array([11.0, 11.5, 12.0, 12.5])
-    x[13:17] = v
-    motor_curve_advance(x, hw)  # a cold cache: every motor by the power
-    assert np.array_equal(hw.curve_ref[1], [_exact_curve(u, hw) for u in v])
-    for step in range(2000):
-        v = v * (1.0 + rng.uniform(-0.004, 0.004, 4))  # the motor lag moves the voltage a little a step
-        x[13:17] = v
-        turn = hw.curve_turn[0]
-        motor_curve_advance(x, hw)
-        exact = np.array([_exact_curve(u, hw) for u in v])
-        assert np.array_equal(hw.curve_ref[0], v) and np.array_equal(hw.curve_ref[2], 1.0 / v)
-        assert hw.curve_ref[1, turn] == exact[turn]  # one motor a step by the power, in turn
-        assert np.max(np.abs(hw.curve_ref[1] / exact - 1.0)) < 1e-15  # the others by the series, no drift
-        for i in range(4):  # the sensors, the log and the first RK4 stage read the cache
-            assert motor_thrust(v[i], i, pp.k_v, pp.f_ceiling, 1.0, hw) == hw.curve_ref[1, i]
-    # a jump beyond the series' range is evaluated by the power
-    x[13] = v[0] * 1.5
-    if hw.curve_turn[0] == 0:
-        motor_curve_advance(x, hw)
-        x[13] *= 1.5
-    motor_curve_advance(x, hw)
-    assert hw.curve_ref[1, 0] == _exact_curve(x[13], hw)
-
-
-def test_motor_curve_of_the_ideal_plant_is_eq40_bit_for_bit_and_uncached():
-    pp = physics_params(IDEAL)
-    x = np.zeros(S.SIZE)
-    x[13:17] = [3.0, 11.7, 12.1, 15.0]
-    motor_curve_advance(x, pp.hw)
-    assert np.all(pp.hw.curve_ref == 0.0)
-    for v in (0.0, 3.0, 11.7, 12.1, 15.0):
-        assert motor_thrust_in_step(v, 1, pp.k_v, pp.f_ceiling, 1.0, pp.hw) == min(pp.k_v * v, pp.f_ceiling)
-
-
 def test_actuator_chain_delays_by_whole_steps_quantises_and_dead_bands():
     pp = _pp(**{"control.actuation_delay": 0.003, "motors.command_steps": 150, "motors.esc_deadband_v": 0.5})
     hw = pp.hw
@@ -168,10 +99,6 @@ def test_actuator_chain_delays_by_whole_steps_quantises_and_dead_bands():
     # 0.3 V is inside the dead-band -> 0; the step at k = 2 arrives at k = 5, quantised to 7.0 V
     assert out[:5] == [0.0] * 5
     assert out[5] == pytest.approx(7.0) and out[7] == pytest.approx(7.0)
-    # the ring buffer wraps: every command arrives exactly delay_steps later, many rounds on
-    seq = np.arange(100) * 0.01 + 1.0
-    got = [actuator_chain(k, np.full(4, seq[k]), hw)[1] for k in range(100)]
-    assert got[3:] == [math.floor(c / hw.quantum + 0.5) * hw.quantum for c in seq[:-3]]
     ideal = physics_params(IDEAL).hw
     cmd = np.array([1.0, 2.0, 3.0, 4.0])
     assert actuator_chain(0, cmd, ideal) is cmd
