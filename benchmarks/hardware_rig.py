@@ -15,8 +15,9 @@ physics, in fresh processes with a warm numba cache for the steady state (the pr
   (cache load), for both: the effects must not slow the cold compile.
 
 Absolute figures on a shared machine are noisy; quote them with the load (``loadavg`` in the
-JSON). ``python -m benchmarks.plugin_overhead --base COMMIT --airframe hilms --airframe ideal``
-compares a change of the step loop with an earlier commit (both trees, same run).
+JSON). The ratio alone cannot judge a change of the step loop (a change that slows the ideal
+plant improves it): ``python -m benchmarks.plugin_overhead --base COMMIT --airframe hilms
+--airframe ideal`` compares both plants with an earlier commit (both trees, same run).
 """
 
 from __future__ import annotations
