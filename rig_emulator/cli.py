@@ -262,8 +262,13 @@ def cmd_params(args) -> int:
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=_overrides(args))
     for key, spec in SCHEMA.items():
         unit = f" [{spec.unit}]" if spec.unit else ""
-        rng = "" if spec.kind in ("table_list",) else f"  ({spec.describe_range()})"
-        print(f"{key} = {cfg[key]!r}{unit}{rng}\n    {spec.doc}")
+        values = spec.describe_values()
+        if key == "airframe.name":
+            values = f"{values}: one of " + ", ".join(repr(a) for a in available("airframes"))
+        print(f"{key} = {cfg[key]!r}{unit}  ({values})\n    {spec.doc}")
+        for name, field in spec.item.items():  # the fields of each entry of a list of tables
+            field_unit = f" [{field.unit}]" if field.unit else ""
+            print(f"    .{name}{field_unit}: {field.describe_values()}: {field.doc}")
     return 0
 
 
