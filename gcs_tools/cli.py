@@ -39,11 +39,11 @@ from pathlib import Path
 from gcs_tools.arg_types import finite_number as _number
 from gcs_tools.arg_types import positive_number as _positive
 from gcs_tools.errors import EXIT_OK, EXIT_USAGE, GcsError, OperationError, UsageError
-from protocol.geodesy import Home
-from protocol.mission_files import MissionFileError
+
+# Heavy modules (numpy, the MAVLink dialect, matplotlib, numba, scipy, the rig emulator) are
+# imported inside the commands that need them: `rig-gcs --help` and `rig-gcs errors` start fast.
 
 DEFAULT_HOME_TEXT = "35.7,51.4,1200"  # rig-emulator serve's default --home (rig_emulator/link/serve_args.py)
-DEFAULT_HOME = Home(*(float(v) for v in DEFAULT_HOME_TEXT.split(",")))
 
 PROG = "rig-gcs"
 
@@ -149,7 +149,8 @@ def cmd_mission(args) -> int:
         if not args.file:
             raise UsageError("mission make needs the FILE to write")
         file_format(args.file)
-        mission = _generated(args, DEFAULT_HOME if args.frame == "global" and args.home is None else None)
+        default_home = _home(DEFAULT_HOME_TEXT) if args.frame == "global" and args.home is None else None
+        mission = _generated(args, default_home)
         if mission is None:
             raise UsageError("mission make needs --rectangle WxH or --helix")
         save_mission(mission, args.file)
@@ -415,9 +416,6 @@ def main(argv=None) -> int:
         args.file, args.connection = args.connection, None  # `mission make FILE`
     try:
         return args.func(args)
-    except MissionFileError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
     except GcsError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return exc.exit_code
@@ -428,6 +426,12 @@ def main(argv=None) -> int:
         from protocol.closed_pipe import quiet_exit_on_closed_pipe
 
         return quiet_exit_on_closed_pipe()
+    except Exception as exc:
+        files = sys.modules.get("protocol.mission_files")  # imported by the commands that read mission files
+        if files is not None and isinstance(exc, files.MissionFileError):
+            print(f"{PROG}: error: {exc}", file=sys.stderr)
+            return EXIT_USAGE
+        raise
 
 
 if __name__ == "__main__":
