@@ -94,7 +94,8 @@ def test_csv_export(run, tmp_path):
     assert main(["csv", str(path), "--csv", str(csv_path), "--fields",
                  "ATTITUDE.roll,LOCAL_POSITION_NED.x,HILMS_LOAD_CELLS.thrust_n[2],NAMED_VALUE_FLOAT.LC1_N"]) == 0
     rows = csv_path.read_text().splitlines()
-    assert rows[0] == "timestamp,ATTITUDE.roll,LOCAL_POSITION_NED.x,HILMS_LOAD_CELLS.thrust_n[2],NAMED_VALUE_FLOAT.LC1_N"
+    assert rows[0] == ("timestamp_s,ATTITUDE.roll_rad,LOCAL_POSITION_NED.x_m,HILMS_LOAD_CELLS.thrust_n[2],"
+                       "NAMED_VALUE_FLOAT.LC1_N")  # units in the names (issue 14); thrust_n and LC1_N carry theirs
     last = rows[-1].split(",")
     assert all(v != "" for v in last)
     att = [m.roll for m in iter_tlog(path, {"ATTITUDE"})]

@@ -16,7 +16,7 @@ def test_simulate_prints_mean_errors_and_writes_csv(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "ME_X(m)" in p.stdout and "paper flc" in p.stdout
     data = np.genfromtxt(out, delimiter=",", names=True)
-    assert data.size == 1500 and "pos_0" in data.dtype.names
+    assert data.size == 1500 and {"t_s", "pos_0_m", "euler_0_rad", "u_0_N", "u_1_Nm", "mode"} <= set(data.dtype.names)
 
 
 def test_simulate_rectangle_reports_waypoints():
