@@ -120,6 +120,7 @@ def cmd_simulate(args) -> int:
 def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
     """A .tlog is still exported from the whole run held in memory (not streamed yet); its
     records are stamped from ``start_unix_s`` (default: now, whole seconds)."""
+    from protocol.run_label import run_label
     from rig_emulator.link.telemetry.tlog_export import export_tlog
     from rig_emulator.simulation.faults import failsafe_cause_text
     from rig_emulator.simulation.run import Simulation
@@ -137,7 +138,8 @@ def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
         i = int(np.argmax(fs > 0))
         failsafe = (float(result.series["t"][i]), failsafe_cause_text(int(fs[i])))
     _print_summary(args, cfg, result, result.mean_errors(), result.reached_t, failsafe)
-    export_tlog(result, out, epoch_s=float(int(time.time())) if start_unix_s is None else start_unix_s)
+    label = run_label(args.scenario, cfg["control.strategy"], cfg["airframe.name"], cfg["sim.seed"])
+    export_tlog(result, out, epoch_s=float(int(time.time())) if start_unix_s is None else start_unix_s, label=label)
     return 0
 
 
