@@ -117,14 +117,6 @@ def iter_tlog(path, types=None):
             yield msg
 
 
-def _value(msg, name: str):
-    """Field ``name`` of ``msg``; ``name[i]`` indexes an array field."""
-    if name.endswith("]"):
-        base, idx = name[:-1].split("[")
-        return getattr(msg, base)[int(idx)]
-    return getattr(msg, name)
-
-
 def read_fields(path, spec: dict, sysid: int | None = None) -> tuple[dict, dict]:
     """Arrays of the fields in ``spec`` ({message type: [field, ...]}), one row per message.
 
@@ -139,6 +131,15 @@ def read_fields(path, spec: dict, sysid: int | None = None) -> tuple[dict, dict]
     total = 0
     chosen = sysid
     named = set(spec.get("NAMED_VALUE_FLOAT", ()))
+    fields = {}  # kind -> (its column, field name, array index or None) per field (``name[i]``: an element)
+    for kind, names in spec.items():
+        if kind == "NAMED_VALUE_FLOAT":  # by value name, below
+            continue
+        parsed = []
+        for f in names:
+            base, _, rest = f.partition("[")
+            parsed.append((rows[kind][f], base, int(rest[:-1]) if rest else None))
+        fields[kind] = parsed
     for total, msg in _iter_counted(path, set(spec)):
         if msg is None:
             continue
@@ -159,17 +160,14 @@ def read_fields(path, spec: dict, sysid: int | None = None) -> tuple[dict, dict]
             continue
         out["_t"].append(msg._timestamp)
         values = msg.__dict__
-        for f in spec[kind]:
+        for column, base, idx in fields[kind]:
             try:
-                out[f].append(float(values[f]))
-            except KeyError:  # an array element (name[i]) or a field this message lacks
-                try:
-                    out[f].append(float(_value(msg, f)))
-                except (AttributeError, IndexError, TypeError, ValueError):
-                    out[f].append(math.nan)
-            except (TypeError, ValueError):
-                out[f].append(math.nan)
+                v = values[base] if idx is None else values[base][idx]
+                column.append(float(v))
+            except (KeyError, IndexError, TypeError, ValueError):  # a field this message lacks
+                column.append(math.nan)
     if total == 0:
         raise UsageError(f"{path}: no MAVLink messages found (not a .tlog?)")
-    arrays = {k: {f: np.asarray(v, dtype=float) for f, v in cols.items()} for k, cols in rows.items()}
+    arrays = {k: {f: np.asarray(v, dtype=float) for f, v in cols.items()} if counts.get(k) else {}
+              for k, cols in rows.items()}  # a type the log lacks: no columns at all
     return arrays, {"counts": dict(counts), "messages": total, "sysid": chosen}

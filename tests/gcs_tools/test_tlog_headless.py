@@ -107,7 +107,7 @@ def test_csv_export(run, tmp_path):
 def test_plot_writes_pngs(run, tmp_path):
     _, path = run
     assert main(["plot", str(path), "-o", str(tmp_path / "plots")]) == 0
-    for name in ("attitude", "xy_path", "position", "thrusts", "load_cells"):
+    for name in ("attitude", "xy_path", "position", "thrusts", "load_cells", "errors", "path_3d"):
         data = (tmp_path / "plots" / f"{name}.png").read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
 
@@ -122,3 +122,6 @@ def test_simulate_out_tlog(tmp_path):
             "HILMS_LOAD_CELLS", "HILMS_CONTROLLER_STATE", "SIM_STATE", "HEARTBEAT"} <= kinds
     errs = tlog_mean_errors(out)["mean_errors"]
     assert all(math.isfinite(v) for v in errs.values())
+    from gcs_tools.plots import run_label_from_tlog
+
+    assert run_label_from_tlog(out) == "scenario hover, strategy smc-flc, airframe hilms, seed 0"  # plot titles

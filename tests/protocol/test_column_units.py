@@ -27,3 +27,4 @@ def test_every_series_of_the_log_has_a_unit_entry():
         assert not isinstance(UNITS[name], tuple) or len(UNITS[name]) == width, name
     _, names = csv_columns()
     assert names[:4] == ["t_s", "pos_0_m", "pos_1_m", "pos_2_m"] and len(set(names)) == len(names)
+
