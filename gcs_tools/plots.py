@@ -96,6 +96,13 @@ def _wrap(angle: np.ndarray) -> np.ndarray:
     return (angle + np.pi) % (2.0 * np.pi) - np.pi
 
 
+def _layout(fig) -> None:
+    """Fixed margins for every figure (a two-line title on top): ``tight_layout`` measured every
+    text first, a fifth of the time of ``rig-gcs plot``."""
+    w, h = fig.get_size_inches()
+    fig.subplots_adjust(left=0.8 / w, right=1.0 - 0.25 / w, bottom=0.55 / h, top=1.0 - 0.75 / h, hspace=0.25)
+
+
 def _save(fig, out: Path, name: str) -> Path:
     path = out / f"{name}.png"
     tmp = out / f".{name}.png.tmp"
@@ -136,7 +143,7 @@ def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None =
             ax.legend(loc="upper right", fontsize=8)
         axes[-1].set_xlabel("t (s)")
         fig.suptitle(named("Attitude vs target"))
-        fig.tight_layout()
+        _layout(fig)
         written.append(_save(fig, out, "attitude"))
         plt.close(fig)
     else:
@@ -162,7 +169,7 @@ def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None =
             ax.legend(loc="upper left", fontsize=8)
         axes[-1].set_xlabel("t (s)")
         fig.suptitle(named("Position vs time (X east, Y north, Z up)"))
-        fig.tight_layout()
+        _layout(fig)
         written.append(_save(fig, out, "position"))
         plt.close(fig)
 
@@ -189,7 +196,7 @@ def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None =
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize=8)
         ax.set_title(named("XY path" + (" and waypoints" if mission is not None else "")))
-        fig.tight_layout()
+        _layout(fig)
         written.append(_save(fig, out, "xy_path"))
         plt.close(fig)
     else:
@@ -218,7 +225,7 @@ def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None =
             ax.legend(loc="upper right", fontsize=8)
         axes[-1, 0].set_xlabel("t (s)")
         fig.suptitle(named("Tracking errors (actual - desired) vs time"))
-        fig.tight_layout()
+        _layout(fig)
         written.append(_save(fig, out, "errors"))
         plt.close(fig)
     else:
@@ -236,7 +243,7 @@ def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None =
         ax.set_zlabel("Z up (m)")
         ax.legend(loc="upper left", fontsize=8)
         ax.set_title(named("3D path"))
-        fig.tight_layout()
+        _layout(fig)
         written.append(_save(fig, out, "path_3d"))
         plt.close(fig)
     else:
@@ -261,7 +268,7 @@ def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None =
             ax.legend(loc="upper right", fontsize=8, ncol=4)
         axes[-1, 0].set_xlabel("t (s)")
         fig.suptitle(named("Motors"))
-        fig.tight_layout()
+        _layout(fig)
         written.append(_save(fig, out, "thrusts"))
         plt.close(fig)
     else:
@@ -281,7 +288,7 @@ def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None =
             ax.grid(True, alpha=0.3)
             ax.legend(loc="upper right", fontsize=8, ncol=4)
         fig.suptitle(named("Load cells"))
-        fig.tight_layout()
+        _layout(fig)
         written.append(_save(fig, out, "load_cells"))
         plt.close(fig)
     else:
