@@ -120,7 +120,10 @@ def headless_tlog(path, scenario: str, **simulate_kwargs):
     from rig_emulator.api import simulate
     from rig_emulator.link.telemetry.tlog_export import export_tlog
 
+    from protocol.run_label import run_label
+
     result = simulate(scenario, **simulate_kwargs)
-    export_tlog(result, path)
+    cfg = result.config
+    export_tlog(result, path, label=run_label(scenario, cfg["control.strategy"], cfg["airframe.name"], cfg["sim.seed"]))
     res = tlog_mean_errors(path)
     return result, RunResult(Path(path), res["mean_errors"], res["samples"])

@@ -9,7 +9,8 @@ Commands (``rig-gcs COMMAND --help`` for each):
 * ``log CONNECTION -o run.tlog`` - record telemetry (.tlog, optional CSV of chosen fields).
 * ``errors run.tlog`` - the mean errors of Eq. 45 in the layout of Table 6.
 * ``plot run.tlog -o DIR`` - PNG plots (attitude, XY path with the switching circles, XYZ,
-  thrusts, load cells).
+  3D path, errors against time, thrusts, load cells), titled with the run's scenario,
+  strategy, airframe and seed.
 * ``csv run.tlog --csv out.csv --fields ...`` - export chosen fields of a .tlog.
 * ``param list|get|set|save|load CONNECTION ...`` - the vehicle's parameters; QGroundControl
   ``.params`` and MAVProxy ``NAME VALUE`` files (:mod:`gcs_tools.param_cli`).
@@ -39,11 +40,11 @@ from pathlib import Path
 from gcs_tools.arg_types import finite_number as _number
 from gcs_tools.arg_types import positive_number as _positive
 from gcs_tools.errors import EXIT_OK, EXIT_USAGE, GcsError, OperationError, UsageError
-from protocol.geodesy import Home
-from protocol.mission_files import MissionFileError
+
+# Heavy modules (numpy, the MAVLink dialect, matplotlib, numba, scipy, the rig emulator) are
+# imported inside the commands that need them: `rig-gcs --help` and `rig-gcs errors` start fast.
 
 DEFAULT_HOME_TEXT = "35.7,51.4,1200"  # rig-emulator serve's default --home (rig_emulator/link/serve_args.py)
-DEFAULT_HOME = Home(*(float(v) for v in DEFAULT_HOME_TEXT.split(",")))
 
 PROG = "rig-gcs"
 
@@ -149,7 +150,8 @@ def cmd_mission(args) -> int:
         if not args.file:
             raise UsageError("mission make needs the FILE to write")
         file_format(args.file)
-        mission = _generated(args, DEFAULT_HOME if args.frame == "global" and args.home is None else None)
+        default_home = _home(DEFAULT_HOME_TEXT) if args.frame == "global" and args.home is None else None
+        mission = _generated(args, default_home)
         if mission is None:
             raise UsageError("mission make needs --rectangle WxH or --helix")
         save_mission(mission, args.file)
@@ -284,7 +286,7 @@ def cmd_plot(args) -> int:
     from protocol.mission_files import load_mission
 
     mission = load_mission(args.mission) if args.mission else None
-    written, skipped = plot_tlog(args.tlog, args.output, mission)
+    written, skipped = plot_tlog(args.tlog, args.output, mission, args.title)
     for p in written:
         print(p)
     for name, why in skipped.items():
@@ -375,10 +377,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON instead of the table")
     p.set_defaults(func=cmd_errors)
 
-    p = sub.add_parser("plot", help="PNG plots of a .tlog")
+    p = sub.add_parser("plot", help="PNG plots of a .tlog",
+                       description="Writes attitude.png (phi, theta, psi vs desired), position.png (X, Y, Z vs time), "
+                                   "xy_path.png (with the waypoints' switching circles), path_3d.png (flown and "
+                                   "desired path in 3D: the helix of Eq. 46), errors.png (attitude and position "
+                                   "errors vs time, with each mean |e| of Eq. 45), thrusts.png and load_cells.png, "
+                                   "as far as the log's messages allow. Titles name the run (scenario, strategy, "
+                                   "airframe, seed) from the log of `rig-emulator simulate --out run.tlog`, else "
+                                   "--title, else the file name.")
     p.add_argument("tlog")
     p.add_argument("-o", "--output", required=True, help="directory for the PNGs")
     p.add_argument("--mission", help="mission file for the XY plot's waypoints (default: the log's mission items)")
+    p.add_argument("--title", help="what the titles name the run when the log does not say (e.g. 'helix, smc-flc, "
+                                   "seed 1'; default: the file name)")
     p.set_defaults(func=cmd_plot)
 
     p = sub.add_parser("stability", help="stability analysis of the FLC attitude gains (Eq. 16-32)",
@@ -415,9 +426,6 @@ def main(argv=None) -> int:
         args.file, args.connection = args.connection, None  # `mission make FILE`
     try:
         return args.func(args)
-    except MissionFileError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
     except GcsError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return exc.exit_code
@@ -428,6 +436,12 @@ def main(argv=None) -> int:
         from protocol.closed_pipe import quiet_exit_on_closed_pipe
 
         return quiet_exit_on_closed_pipe()
+    except Exception as exc:
+        files = sys.modules.get("protocol.mission_files")  # imported by the commands that read mission files
+        if files is not None and isinstance(exc, files.MissionFileError):
+            print(f"{PROG}: error: {exc}", file=sys.stderr)
+            return EXIT_USAGE
+        raise
 
 
 if __name__ == "__main__":

@@ -8,7 +8,9 @@ is kept in memory per message, so long runs log at a steady memory.
 :func:`export_csv` streams a .tlog into a CSV of chosen ``MESSAGE.field`` columns (array
 elements as ``MESSAGE.field[i]``, NAMED_VALUE_FLOAT values as ``NAMED_VALUE_FLOAT.NAME``):
 one row per message that carries a chosen field, the other columns holding their latest
-value (empty before the first). Written to a temporary file and moved into place.
+value (empty before the first). The header names end with their unit from the dialect
+(``timestamp_s``, ``ATTITUDE.roll_rad``, ``LOCAL_POSITION_NED.x_m``; ``protocol/column_units.py``).
+Written to a temporary file and moved into place.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from gcs_tools.errors import OperationError, UsageError
 from gcs_tools.link import Link, message_id
 from gcs_tools.tlog_read import iter_tlog
 from protocol.atomic_file import atomic_path
+from protocol.column_units import with_unit
 from protocol.dialect import mavlink as M
 from rig_emulator.link.telemetry.tlog_export import TlogWriter
 
@@ -58,10 +61,18 @@ def parse_fields(specs) -> list[tuple[str, str, int | None]]:
     return out
 
 
+def _header(message: str, field: str, index) -> str:
+    """``MESSAGE.field[i]`` followed by its unit from the dialect (``ATTITUDE.roll_rad``); a
+    NAMED_VALUE_FLOAT value keeps its name (the rig's names end with their unit: ``LC1_N``)."""
+    name = f"{message}.{field}" + ("" if index is None else f"[{index}]")
+    cls = next((c for c in M.mavlink_map.values() if c.msgname == message), None)
+    return with_unit(name, getattr(cls, "fieldunits_by_name", {}).get(field))
+
+
 def export_csv(tlog, csv_path, fields: list[str]) -> int:
     """Write the chosen fields of ``tlog`` as CSV (atomically); returns the number of rows."""
     parsed = parse_fields(fields)
-    headers = [f"{m}.{f}" + ("" if i is None else f"[{i}]") for m, f, i in parsed]
+    headers = [_header(m, f, i) for m, f, i in parsed]
     latest = [""] * len(parsed)
     by_type: dict = {}
     for col, (m, f, i) in enumerate(parsed):
@@ -70,7 +81,7 @@ def export_csv(tlog, csv_path, fields: list[str]) -> int:
     with atomic_path(csv_path) as tmp:
         with open(tmp, "w", newline="", encoding="utf-8") as fh:
             w = csv.writer(fh)
-            w.writerow(["timestamp", *headers])
+            w.writerow(["timestamp_s", *headers])
             for msg in iter_tlog(tlog, set(by_type)):
                 hit = False
                 for col, f, i in by_type[msg.get_type()]:

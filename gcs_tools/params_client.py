@@ -173,7 +173,8 @@ class ParamClient:
         if kept is None:
             raise OperationError(f"{name}: no PARAM_VALUE echo after {self.retries + 1} PARAM_SET "
                                  f"({self.timeout:g} s each)")
-        why = f" ({'; '.join(reasons.values())})" if reasons else ""
+        texts = dict.fromkeys(t.strip() for t in reasons.values())  # one line per distinct reason: every resend
+        why = f" ({'; '.join(texts)})" if texts else ""                 # of the set is refused with the same text
         raise OperationError(f"{name}: the vehicle rejected {value:g} and kept {kept:g}{why}")
 
 

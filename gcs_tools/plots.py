@@ -8,7 +8,15 @@
 * ``position.png`` - X, Y, Z against time with their targets (like Fig. 16);
 * ``thrusts.png`` - motor thrusts from HILMS_LOAD_CELLS (N, like Fig. 18) and the motor
   commands from SERVO_OUTPUT_RAW (us);
-* ``load_cells.png`` - the load cells: raw ADC counts and force (gram-force).
+* ``load_cells.png`` - the load cells: raw ADC counts and force (gram-force);
+* ``errors.png`` - the tracking errors against time: phi, theta, psi (deg) and X, Y, Z (m),
+  actual minus the latest target (the samples of Eq. 45; the legend gives each mean |e|);
+* ``path_3d.png`` - the flown path and the target path in 3D (X east, Y north, Z up; the
+  helix of Eq. 46 as the paper's Fig. 16 shows it).
+
+Every title names the run: scenario, strategy, airframe and seed from the log's ``run:``
+STATUSTEXT (``protocol/run_label.py``; headless logs of ``rig-emulator simulate`` carry it),
+else ``title`` (``rig-gcs plot --title``), else the log's file name.
 
 Positions are the paper's world frame (X east, Y north, Z up, :func:`protocol.frames.ned_to_enu`);
 time is the vehicle's clock (``time_boot_ms`` / ``time_usec``), in seconds.
@@ -28,6 +36,7 @@ from protocol.dialect import mavlink as M
 from protocol.frames import mavlink_euler_to_paper
 from protocol.geodesy import Home
 from protocol.mission_files import Mission
+from protocol.run_label import label_from_texts
 from gcs_tools.mission_client import item_from_message
 
 SPEC = {
@@ -40,7 +49,7 @@ SPEC = {
     "SERVO_OUTPUT_RAW": ["time_usec"] + [f"servo{i}_raw" for i in range(1, 5)],
     "HOME_POSITION": ["latitude", "longitude", "altitude"],
 }
-FIGURES = ("attitude", "xy_path", "position", "thrusts", "load_cells")
+FIGURES = ("attitude", "xy_path", "position", "thrusts", "load_cells", "errors", "path_3d")
 
 
 def _plt():
@@ -73,6 +82,27 @@ def mission_from_tlog(path) -> Mission | None:
     return Mission(tuple(items[k] for k in range(n)))
 
 
+def run_label_from_tlog(path) -> str | None:
+    """The run label of the log's ``run:`` STATUSTEXT (chunks of one ``id`` joined), or None."""
+    texts: dict = {}
+    for msg in iter_tlog(path, {"STATUSTEXT"}):
+        text = msg.text if isinstance(msg.text, str) else msg.text.decode("ascii", "replace")
+        key = (msg.get_srcSystem(), msg.id) if msg.id else object()
+        texts[key] = texts.get(key, "") + text.rstrip("\x00")
+    return label_from_texts(texts.values())
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def _layout(fig) -> None:
+    """Fixed margins for every figure (a two-line title on top): ``tight_layout`` measured every
+    text first, a fifth of the time of ``rig-gcs plot``."""
+    w, h = fig.get_size_inches()
+    fig.subplots_adjust(left=0.8 / w, right=1.0 - 0.25 / w, bottom=0.55 / h, top=1.0 - 0.75 / h, hspace=0.25)
+
+
 def _save(fig, out: Path, name: str) -> Path:
     path = out / f"{name}.png"
     tmp = out / f".{name}.png.tmp"
@@ -81,12 +111,15 @@ def _save(fig, out: Path, name: str) -> Path:
     return path
 
 
-def plot_tlog(path, out_dir, mission: Mission | None = None) -> tuple[list[Path], dict]:
-    """Write the PNGs that the log's messages allow; returns (files written, {figure: reason skipped})."""
+def plot_tlog(path, out_dir, mission: Mission | None = None, title: str | None = None) -> tuple[list[Path], dict]:
+    """Write the PNGs that the log's messages allow; returns (files written, {figure: reason skipped}).
+    Titles name the run (module doc); ``title`` when the log does not."""
     plt = _plt()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     arrays, info = read_fields(path, SPEC)
+    run = run_label_from_tlog(path) or title or Path(path).name
+    named = lambda what: f"{what}\n{run}"  # noqa: E731
     counts = info["counts"]
     has = lambda *names: all(counts.get(n, 0) > 0 for n in names)  # noqa: E731
     written, skipped = [], {}
@@ -109,8 +142,8 @@ def plot_tlog(path, out_dir, mission: Mission | None = None) -> tuple[list[Path]
             ax.grid(True, alpha=0.3)
             ax.legend(loc="upper right", fontsize=8)
         axes[-1].set_xlabel("t (s)")
-        fig.suptitle("Attitude vs target")
-        fig.tight_layout()
+        fig.suptitle(named("Attitude vs target"))
+        _layout(fig)
         written.append(_save(fig, out, "attitude"))
         plt.close(fig)
     else:
@@ -135,8 +168,8 @@ def plot_tlog(path, out_dir, mission: Mission | None = None) -> tuple[list[Path]
             ax.grid(True, alpha=0.3)
             ax.legend(loc="upper left", fontsize=8)
         axes[-1].set_xlabel("t (s)")
-        fig.suptitle("Position vs time (X east, Y north, Z up)")
-        fig.tight_layout()
+        fig.suptitle(named("Position vs time (X east, Y north, Z up)"))
+        _layout(fig)
         written.append(_save(fig, out, "position"))
         plt.close(fig)
 
@@ -162,12 +195,59 @@ def plot_tlog(path, out_dir, mission: Mission | None = None) -> tuple[list[Path]
         ax.set_aspect("equal", adjustable="datalim")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize=8)
-        ax.set_title("XY path" + (" and waypoints" if mission is not None else ""))
-        fig.tight_layout()
+        ax.set_title(named("XY path" + (" and waypoints" if mission is not None else "")))
+        _layout(fig)
         written.append(_save(fig, out, "xy_path"))
         plt.close(fig)
     else:
         skipped["position"] = skipped["xy_path"] = "no LOCAL_POSITION_NED"
+
+    # errors against time (actual - latest target, as Eq. 45 pairs them)
+    panels = []
+    if has("ATTITUDE", "ATTITUDE_TARGET"):
+        s_att = attitude_series(arrays)
+        act = np.column_stack(mavlink_euler_to_paper(*s_att["actual"].T))
+        tgt = np.column_stack(mavlink_euler_to_paper(*s_att["target"].T))
+        panels.append((s_att["t"], np.degrees(_wrap(act - tgt)), ("phi", "theta", "psi"), "deg", "attitude error"))
+    if has("LOCAL_POSITION_NED", "POSITION_TARGET_LOCAL_NED"):
+        s_pos = position_series(arrays)
+        panels.append((s_pos["t"], s_pos["actual"] - s_pos["target"], ("X", "Y", "Z"), "m", "position error"))
+    if panels:
+        fig, axes = plt.subplots(len(panels), 1, figsize=(9, 3.5 * len(panels)), sharex=True, squeeze=False)
+        for ax, (t, err, names, unit, what) in zip(axes[:, 0], panels):
+            for i, name in enumerate(names):
+                e = err[:, i]
+                mean = np.nanmean(np.abs(e)) if np.any(np.isfinite(e)) else np.nan
+                ax.plot(t, e, lw=0.8, label=f"e_{name} (mean |e| {mean:.4g} {unit})")
+            ax.axhline(0.0, color="k", lw=0.5)
+            ax.set_ylabel(f"{what} ({unit})")
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="upper right", fontsize=8)
+        axes[-1, 0].set_xlabel("t (s)")
+        fig.suptitle(named("Tracking errors (actual - desired) vs time"))
+        _layout(fig)
+        written.append(_save(fig, out, "errors"))
+        plt.close(fig)
+    else:
+        skipped["errors"] = "no ATTITUDE with ATTITUDE_TARGET nor LOCAL_POSITION_NED with POSITION_TARGET_LOCAL_NED"
+
+    # 3D path (the helix of Eq. 46, Fig. 16)
+    if has("LOCAL_POSITION_NED"):
+        fig = plt.figure(figsize=(8, 7))
+        ax = fig.add_subplot(projection="3d")
+        if s["target"] is not None:
+            ax.plot(s["target"][:, 0], s["target"][:, 1], s["target"][:, 2], "--", lw=1.0, label="desired")
+        ax.plot(s["actual"][:, 0], s["actual"][:, 1], s["actual"][:, 2], lw=1.0, label="flown")
+        ax.set_xlabel("X east (m)")
+        ax.set_ylabel("Y north (m)")
+        ax.set_zlabel("Z up (m)")
+        ax.legend(loc="upper left", fontsize=8)
+        ax.set_title(named("3D path"))
+        _layout(fig)
+        written.append(_save(fig, out, "path_3d"))
+        plt.close(fig)
+    else:
+        skipped["path_3d"] = "no LOCAL_POSITION_NED"
 
     # thrusts
     if has("HILMS_LOAD_CELLS") or has("SERVO_OUTPUT_RAW"):
@@ -187,7 +267,8 @@ def plot_tlog(path, out_dir, mission: Mission | None = None) -> tuple[list[Path]
             ax.grid(True, alpha=0.3)
             ax.legend(loc="upper right", fontsize=8, ncol=4)
         axes[-1, 0].set_xlabel("t (s)")
-        fig.tight_layout()
+        fig.suptitle(named("Motors"))
+        _layout(fig)
         written.append(_save(fig, out, "thrusts"))
         plt.close(fig)
     else:
@@ -206,8 +287,8 @@ def plot_tlog(path, out_dir, mission: Mission | None = None) -> tuple[list[Path]
         for ax in axes:
             ax.grid(True, alpha=0.3)
             ax.legend(loc="upper right", fontsize=8, ncol=4)
-        fig.suptitle("Load cells")
-        fig.tight_layout()
+        fig.suptitle(named("Load cells"))
+        _layout(fig)
         written.append(_save(fig, out, "load_cells"))
         plt.close(fig)
     else:

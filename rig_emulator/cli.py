@@ -120,6 +120,7 @@ def cmd_simulate(args) -> int:
 def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
     """A .tlog is still exported from the whole run held in memory (not streamed yet); its
     records are stamped from ``start_unix_s`` (default: now, whole seconds)."""
+    from protocol.run_label import run_label
     from rig_emulator.link.telemetry.tlog_export import export_tlog
     from rig_emulator.simulation.faults import failsafe_cause_text
     from rig_emulator.simulation.run import Simulation
@@ -137,7 +138,8 @@ def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
         i = int(np.argmax(fs > 0))
         failsafe = (float(result.series["t"][i]), failsafe_cause_text(int(fs[i])))
     _print_summary(args, cfg, result, result.mean_errors(), result.reached_t, failsafe)
-    export_tlog(result, out, epoch_s=float(int(time.time())) if start_unix_s is None else start_unix_s)
+    label = run_label(args.scenario, cfg["control.strategy"], cfg["airframe.name"], cfg["sim.seed"])
+    export_tlog(result, out, epoch_s=float(int(time.time())) if start_unix_s is None else start_unix_s, label=label)
     return 0
 
 
@@ -262,8 +264,13 @@ def cmd_params(args) -> int:
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=_overrides(args))
     for key, spec in SCHEMA.items():
         unit = f" [{spec.unit}]" if spec.unit else ""
-        rng = "" if spec.kind in ("table_list",) else f"  ({spec.describe_range()})"
-        print(f"{key} = {cfg[key]!r}{unit}{rng}\n    {spec.doc}")
+        values = spec.describe_values()
+        if key == "airframe.name":
+            values = f"{values}: one of " + ", ".join(repr(a) for a in available("airframes"))
+        print(f"{key} = {cfg[key]!r}{unit}  ({values})\n    {spec.doc}")
+        for name, field in spec.item.items():  # the fields of each entry of a list of tables
+            field_unit = f" [{field.unit}]" if field.unit else ""
+            print(f"    .{name}{field_unit}: {field.describe_values()}: {field.doc}")
     return 0
 
 

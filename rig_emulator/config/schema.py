@@ -28,12 +28,41 @@ class Spec:
     choices: tuple = ()
     length: int | None = None
     item: dict[str, "Spec"] = field(default_factory=dict)
+    values: str = ""  # what a free-form value may be, in words (strings without choices, special lists)
 
     def describe_range(self) -> str:
+        """The allowed interval of a number (or the choices of a string), as error messages quote it."""
         if self.choices:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         lo = "(" if self.lo_open else "["
-        return f"in {lo}{self.lo:g}, {self.hi:g}]"
+        return f"in {lo}{self._bound(self.lo)}, {self._bound(self.hi)}]"
+
+    def _bound(self, v: float) -> str:
+        return str(int(v)) if self.kind == "int" and math.isfinite(v) else f"{v:g}"
+
+    def describe_values(self) -> str:
+        """What a value of this parameter may be, in words, for listings (``rig-emulator params``)."""
+        if self.values:
+            return self.values
+        if self.choices:
+            return self.describe_range()
+        if self.kind == "bool":
+            return "true or false"
+        if self.kind == "str":
+            return "any text"
+        if self.kind == "tree":
+            return "a table of overrides"
+        if self.kind == "params":
+            return "a table of name = number or list of numbers"
+        if self.kind == "table_list":
+            return "a list of tables, each with the fields below"
+        number = "any finite number" if math.isinf(self.lo) and math.isinf(self.hi) else self.describe_range()
+        if self.kind == "int":
+            return "an integer " + number if number.startswith("in ") else "any integer"
+        if self.kind in ("vec3", "floats"):
+            count = f"{self.length} " if self.length else "a list of "
+            return (f"{count}finite numbers" if number == "any finite number" else f"{count}numbers, each {number}")
+        return number
 
 
 def F(doc, unit="", lo=-math.inf, hi=math.inf, lo_open=False):
@@ -70,7 +99,7 @@ SCHEMA: dict[str, Spec] = {
     "sim.seed": I("random seed (sensor noise, turn-on errors, gusts)", 0, 2**63 - 1),
     "sim.ground": Spec("bool", "virtual ground at Z = 0: the virtual position cannot go below it"),
     # --- airframe (Table 2) ------------------------------------------------------------
-    "airframe.name": Spec("str", "airframe preset name"),
+    "airframe.name": Spec("str", "airframe preset name", values="an airframe preset (chosen with --airframe)"),
     "airframe.mass": F("mass m (Table 2)", "kg", 0.0, 100.0, lo_open=True),
     "airframe.ixx": F("inertia Ixx (Table 2)", "kg m^2", 0.0, 100.0, lo_open=True),
     "airframe.iyy": F("inertia Iyy (Table 2)", "kg m^2", 0.0, 100.0, lo_open=True),
@@ -100,7 +129,8 @@ SCHEMA: dict[str, Spec] = {
     # --- control ---------------------------------------------------------------------------
     "control.strategy": S("controller strategy", STRATEGIES),
     "controller.plugin": Spec("str", "controller plug-in 'package.module:Name' flying instead of (part of) the strategy "
-                                     "(docs/YOUR_CONTROLLER.md); empty: the built-in strategy alone"),
+                                     "(docs/YOUR_CONTROLLER.md); empty: the built-in strategy alone",
+                             values="'package.module:Name', or empty"),
     "controller.params": Spec("params", "the plug-in's own parameters (name = number or list of numbers) over its defaults"),
     "controller.call": S("how a compiled plug-in runs: 'compiled' (inside the compiled loop) or 'python' (its kernel as "
                          "plain Python, e.g. to debug it)", ("compiled", "python")),
@@ -164,7 +194,8 @@ SCHEMA: dict[str, Spec] = {
     "guidance.yaw_deg": F("desired yaw (the paper keeps it 0)", "deg", -180.0, 180.0),
     "guidance.amplitude_deg": V3("harmonic attitude amplitudes for phi, theta, psi (Eq. 44)", "deg", 0.0, 80.0),
     "guidance.omega": F("harmonic attitude frequency (Eq. 44)", "rad/s", 0.0, 1e3, lo_open=True),
-    "guidance.waypoints": Spec("floats", "waypoints as [[x, y, z], ...] in world ENU", "m"),
+    "guidance.waypoints": Spec("floats", "waypoints as [[x, y, z], ...] in world ENU", "m",
+                               values="a list of [x, y, z], each coordinate in [-1e+05, 1e+05]"),  # loader._check_waypoints
     "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
     "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
     "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
@@ -208,7 +239,8 @@ SCHEMA: dict[str, Spec] = {
         ("levenberg-marquardt", "none"),
     ),
     "sensors.calibration_file": Spec(
-        "str", "IMU calibration file to load (from `rig-emulator calibrate`); empty: run the procedure at start-up"
+        "str", "IMU calibration file to load (from `rig-emulator calibrate`); empty: run the procedure at start-up",
+        values="a file path, or empty",
     ),
     "estimation.ensemble": S("combination of the five modules: 'mean' (paper), 'median' or 'robust_mean'", ("mean", "median", "robust_mean")),
     "estimation.load_cell_filter": S("load-cell smoothing after the guards: 'iir' (paper), 'kalman' or 'none'", ("iir", "kalman", "none")),

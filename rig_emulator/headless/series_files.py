@@ -4,7 +4,8 @@ Each writer takes log rows (:mod:`rig_emulator.simulation.log_layout`) as they a
 (:meth:`write`), so a run of any length needs memory for one chunk only, and produces the
 file a whole-series export would: ``.npz`` holds one array per series name (``t``, ``pos``
 (n, 3), ...; what ``numpy.savez_compressed`` of :attr:`SimResult.series` writes), ``.csv``
-one column per component with a header line. :meth:`commit` finishes the file and moves
+one column per component with a header line of names that end with their unit
+(``t_s``, ``pos_0_m``, ``euler_0_rad``, ``u_1_Nm``; :data:`UNITS`, ``protocol/column_units.py``). :meth:`commit` finishes the file and moves
 it into place atomically (``protocol/atomic_file.py``); :meth:`abort` removes everything
 written and leaves an existing file as it was.
 
@@ -25,22 +26,33 @@ from pathlib import Path
 import numpy as np
 
 from protocol.atomic_file import atomic_path
+from protocol.column_units import with_unit
 from rig_emulator.simulation import log_layout as L
 
 COPY_BYTES = 16 * 1024 * 1024
 
+#: unit of each series of the log (SI, as the step loop records it; log_layout.py), per component
+#: where they differ; "" for codes, flags and the dimensionless virtual inputs of Eq. 34
+UNITS = {
+    "t": "s", "pos": "m", "vel": "m/s", "euler": "rad", "omega": "rad/s", "pos_des": "m", "vel_des": "m/s",
+    "euler_des": "rad", "thrust": "N", "v_cmd": "V", "u": ("N", "N m", "N m", "N m"), "s": "rad/s", "flags": "",
+    "waypoint": "", "euler_rate": "rad/s", "euler_rate_des": "rad/s", "mode": "", "uxy": "", "pos_true": "m",
+    "euler_true": "rad", "thrust_meas": "N", "health": "", "failsafe": "", "estimate_invalid": "",
+}
+
 
 def csv_columns() -> tuple[list[int], list[str]]:
-    """Log column and header name of every CSV column (``pos_0``, ``pos_1``, ... for vectors)."""
+    """Log column and header name of every CSV column (``t_s``; ``pos_0_m``, ``pos_1_m``, ... for vectors)."""
     cols, names = [], []
     for name, (start, width) in L.NAMES.items():
+        units = UNITS[name] if isinstance(UNITS[name], tuple) else (UNITS[name],) * width
         if width == 1:
             cols.append(start)
-            names.append(name)
+            names.append(with_unit(name, units[0]))
         else:
             for i in range(width):
                 cols.append(start + i)
-                names.append(f"{name}_{i}")
+                names.append(with_unit(f"{name}_{i}", units[i]))
     return cols, names
 
 

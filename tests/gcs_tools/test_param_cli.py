@@ -40,3 +40,13 @@ def test_unknown_name_sets_nothing(rig, capsys, tmp_path):
     assert rig.server.rig.cfg["estimation.tau_yaw"] == before
     assert main(["param", "get", url, "NO_SUCH_PARAM", "--timeout", "0.2", "--retries", "1"]) == 1
     assert "NO_SUCH_PARAM: no PARAM_VALUE after 2 PARAM_REQUEST_READ" in capsys.readouterr().err
+
+
+def test_rejected_set_prints_its_reason_once(rig, capsys):
+    url = client_url(rig.tcp_url)
+    before = rig.server.rig.cfg["smc.k"][0]
+    assert main(["param", "set", url, "SMC_K_PHI", "1e9", "--timeout", "0.5"]) == 1
+    err = capsys.readouterr().err
+    assert f"SMC_K_PHI: the vehicle rejected 1e+09 and kept {before:g}" in err
+    assert err.count("must be in [0, 10000]") == 1, err
+    assert rig.server.rig.cfg["smc.k"][0] == before

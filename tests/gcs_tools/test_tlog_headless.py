@@ -94,7 +94,8 @@ def test_csv_export(run, tmp_path):
     assert main(["csv", str(path), "--csv", str(csv_path), "--fields",
                  "ATTITUDE.roll,LOCAL_POSITION_NED.x,HILMS_LOAD_CELLS.thrust_n[2],NAMED_VALUE_FLOAT.LC1_N"]) == 0
     rows = csv_path.read_text().splitlines()
-    assert rows[0] == "timestamp,ATTITUDE.roll,LOCAL_POSITION_NED.x,HILMS_LOAD_CELLS.thrust_n[2],NAMED_VALUE_FLOAT.LC1_N"
+    assert rows[0] == ("timestamp_s,ATTITUDE.roll_rad,LOCAL_POSITION_NED.x_m,HILMS_LOAD_CELLS.thrust_n[2],"
+                       "NAMED_VALUE_FLOAT.LC1_N")  # units in the names (issue 14); thrust_n and LC1_N carry theirs
     last = rows[-1].split(",")
     assert all(v != "" for v in last)
     att = [m.roll for m in iter_tlog(path, {"ATTITUDE"})]
@@ -106,7 +107,7 @@ def test_csv_export(run, tmp_path):
 def test_plot_writes_pngs(run, tmp_path):
     _, path = run
     assert main(["plot", str(path), "-o", str(tmp_path / "plots")]) == 0
-    for name in ("attitude", "xy_path", "position", "thrusts", "load_cells"):
+    for name in ("attitude", "xy_path", "position", "thrusts", "load_cells", "errors", "path_3d"):
         data = (tmp_path / "plots" / f"{name}.png").read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
 
@@ -121,3 +122,6 @@ def test_simulate_out_tlog(tmp_path):
             "HILMS_LOAD_CELLS", "HILMS_CONTROLLER_STATE", "SIM_STATE", "HEARTBEAT"} <= kinds
     errs = tlog_mean_errors(out)["mean_errors"]
     assert all(math.isfinite(v) for v in errs.values())
+    from gcs_tools.plots import run_label_from_tlog
+
+    assert run_label_from_tlog(out) == "scenario hover, strategy smc-flc, airframe hilms, seed 0"  # plot titles

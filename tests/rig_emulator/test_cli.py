@@ -16,7 +16,7 @@ def test_simulate_prints_mean_errors_and_writes_csv(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "ME_X(m)" in p.stdout and "paper flc" in p.stdout
     data = np.genfromtxt(out, delimiter=",", names=True)
-    assert data.size == 1500 and "pos_0" in data.dtype.names
+    assert data.size == 1500 and {"t_s", "pos_0_m", "euler_0_rad", "u_0_N", "u_1_Nm", "mode"} <= set(data.dtype.names)
 
 
 def test_simulate_rectangle_reports_waypoints():
@@ -38,6 +38,22 @@ def test_params_lists_every_key():
     p = _run("params")
     assert p.returncode == 0
     assert "smc.k = [1.47, 1.47, 1.42]" in p.stdout and "flc.d1_phi_deg" in p.stdout
+
+
+def test_params_lists_what_each_value_may_be(capsys):
+    from rig_emulator.cli import main
+
+    assert main(["params"]) == 0
+    out = capsys.readouterr().out
+    assert "inf, inf" not in out
+    assert "sim.ground = True  (true or false)" in out
+    assert "control.strategy = 'smc-flc'  (one of 'smc-flc', 'flc', 'smc', 'pid')" in out
+    assert "airframe.name = 'hilms'  (an airframe preset (chosen with --airframe): one of " in out
+    assert "'hilms-ideal'" in out.split("airframe.name", 1)[1].splitlines()[0]
+    assert "controller.plugin = ''  ('package.module:Name', or empty)" in out
+    assert "guidance.hover_position = [0.0, 0.0, 0.0] [m]  (3 finite numbers)" in out
+    assert "sim.seed = 0  (an integer in [0, 9223372036854775807])" in out
+    assert "    .sensor: one of 'imu', 'load_cell', 'motor': which kind of device" in out
 
 
 def test_calibrate_then_fly_on_the_stored_calibration(tmp_path):

@@ -42,6 +42,7 @@ from protocol.atomic_file import atomic_path
 from protocol.dialect import mavlink as M
 from protocol.frames import enu_to_ned
 from protocol.geodesy import Home
+from protocol.run_label import label_chunks
 from rig_emulator.link.telemetry import attitude as A
 from rig_emulator.link.telemetry import position as P
 from rig_emulator.link.telemetry import sensors as S
@@ -167,8 +168,19 @@ def mission_messages(cfg, sysid: int = 1) -> list:
     return out
 
 
-def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1):
-    """(simulated time s, message) of a headless run, in the order a live log would hold them."""
+def label_messages(label: str | None) -> list:
+    """STATUSTEXT (INFO) chunks naming the run (``protocol/run_label.py``; issue 14: plot titles); [] for None."""
+    if not label:
+        return []
+    chunks = label_chunks(label)
+    msg_id = 1 if len(chunks) > 1 else 0
+    return [M.MAVLink_statustext_message(severity=M.MAV_SEVERITY_INFO, text=c.encode("ascii", "replace"), id=msg_id,
+                                         chunk_seq=seq) for seq, c in enumerate(chunks)]
+
+
+def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1, label: str | None = None):
+    """(simulated time s, message) of a headless run, in the order a live log would hold them;
+    ``label`` (:func:`protocol.run_label.run_label`) goes first as STATUSTEXT."""
     cfg = result.config
     modes = FlightModes()
     modes.note(OFFBOARD, 0)
@@ -182,7 +194,7 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1):
         snap = row_snapshot(series, k, guidance)
         t = snap.time_s
         if k == 0:
-            for msg in mission_messages(cfg, sysid):
+            for msg in label_messages(label) + mission_messages(cfg, sysid):
                 yield t, msg
         if t >= next_second:
             next_second = math.floor(t) + 1.0
@@ -195,15 +207,17 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1):
         yield t, P.sim_state(snap, ctx)
 
 
-def export_tlog(result, path, home: Home = DEFAULT_HOME, sysid: int = 1, epoch_s: float = 0.0) -> int:
+def export_tlog(result, path, home: Home = DEFAULT_HOME, sysid: int = 1, epoch_s: float = 0.0,
+                label: str | None = None) -> int:
     """Write ``result`` as a .tlog at ``path`` (atomically); returns the number of messages.
+    ``label`` names the run in a first STATUSTEXT (``protocol/run_label.py``).
 
     Record timestamps are ``epoch_s`` + simulated time (default: the Unix epoch, so the same
     run gives the same bytes).
     """
     with atomic_path(path) as tmp:
         with TlogWriter(tmp, srcSystem=sysid) as w:
-            for t, msg in iter_messages(result, home, sysid):
+            for t, msg in iter_messages(result, home, sysid, label):
                 w.write(msg, epoch_s + t)
             count = w.count
     return count
