@@ -172,8 +172,8 @@ def test_recovery_without_reboot_once_level_and_the_estimator_is_healthy(rig, gc
 
 
 def test_reboot_keeps_parameters_and_mission(rig, gcs):
-    gcs.mav.param_set_send(1, 1, b"GUI_SPEED", 0.7, M.MAV_PARAM_TYPE_REAL32)
-    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "GUI_SPEED").param_value == pytest.approx(0.7)
+    gcs.mav.param_set_send(1, 1, b"MPC_XY_CRUISE", 0.7, M.MAV_PARAM_TYPE_REAL32)
+    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "MPC_XY_CRUISE").param_value == pytest.approx(0.7)
     items = [MissionItem(0, ENU, M.MAV_CMD_NAV_TAKEOFF, z=1.0, current=1),
              MissionItem(1, ENU, M.MAV_CMD_NAV_WAYPOINT, x=1.0, z=1.0)]
     assert MissionClient(gcs).upload(items) == M.MAV_MISSION_ACCEPTED
@@ -183,8 +183,8 @@ def test_reboot_keeps_parameters_and_mission(rig, gcs):
     assert command(gcs, M.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, 2).result == UNSUPPORTED  # shutdown
     assert command(gcs, M.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, 1).result == ACCEPTED
     assert recv(gcs, "ATTITUDE", 10, lambda m: m.time_boot_ms < 2000) is not None
-    gcs.mav.param_request_read_send(1, 1, b"GUI_SPEED", -1)
-    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "GUI_SPEED").param_value == pytest.approx(0.7)
+    gcs.mav.param_request_read_send(1, 1, b"MPC_XY_CRUISE", -1)
+    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "MPC_XY_CRUISE").param_value == pytest.approx(0.7)
     assert len(MissionClient(gcs).download()) == 2
     assert recv(gcs, "MISSION_CURRENT", 10, lambda m: m.mission_state == M.MISSION_STATE_NOT_STARTED)
 
