@@ -62,18 +62,21 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
             err = out.wait_for(r"(required argument is not a float|struct\.error|Exception)", timeout=15)
             results["mode LOITER (MAVProxy's own mode command)"] = "client error: " + (err.group(1) if err else "none?")
             out.do("module load gcs_tools.mavproxy_px4modes", r"Loaded module gcs_tools\.mavproxy_px4modes")
+            before = _reported_mode(obs)
             for name in names:
                 mark = len(out.all)
                 ack = out.do(f"mode {name}", ACK)
                 results[f"mode {name}"], text = _mode_result(out, mark, ack)
-                results[f"mode {name}"] += f" -> {_reported_mode(obs)}"
+                reported = _reported_mode(obs)
+                results[f"mode {name}"] += f" -> HEARTBEAT {reported}"
                 if name in FLOWN:
-                    assert ack.group(1) == "ACCEPTED", (name, results)
-                else:
-                    assert ack.group(1) == "DENIED" and text is not None, (name, results)
+                    assert ack.group(1) == "ACCEPTED" and reported == name, (name, results)
+                else:  # refused with the reason, the mode flown before kept
+                    assert ack.group(1) == "DENIED" and text is not None and reported == before, (name, results)
+                before = reported
             out.do("posctl", r"Got COMMAND_ACK: DO_SET_MODE: ACCEPTED")  # a bare name, as MAVProxy offers it
             assert _reported_mode(obs) == "POSCTL"
-            results["posctl (bare name)"] = "ACCEPTED -> POSCTL"
+            results["posctl (bare name)"] = "ACCEPTED -> HEARTBEAT POSCTL"
             base, main, sub = mavutil.px4_map["LOITER"]
             out.do(f"long DO_SET_MODE {base} {main} {sub}", r"Got COMMAND_ACK: DO_SET_MODE: ACCEPTED")
             results[f"long DO_SET_MODE {base} {main} {sub} (LOITER by hand)"] = "ACCEPTED"
