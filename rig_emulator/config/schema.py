@@ -150,7 +150,8 @@ SCHEMA: dict[str, Spec] = {
     "flc.d1_ux": F("d1 of virtual input uX (Table 5)", "", 0.0, 1.0, lo_open=True),
     "flc.d1_uy": F("d1 of virtual input uY (Table 5)", "", 0.0, 1.0, lo_open=True),
     "flc.position_rate_share": F("share of the desired velocity in the position FLC's error rate: 1 derivative on "
-                                 "the error (v_des - v), 0 derivative on the measurement (-v)", "", 0.0, 1.0),
+                                 "the error (v_des - v), 0 derivative on the measurement (-v); position errors only: a velocity "
+                                 "set-point with no position is tracked as v_des - v", "", 0.0, 1.0),
     "pid.attitude_kp": V3("attitude PID proportional gains", "1/s^2", 0.0, 1e5),
     "pid.attitude_ki": V3("attitude PID integral gains", "1/s^3", 0.0, 1e5),
     "pid.attitude_kd": V3("attitude PID derivative gains", "1/s", 0.0, 1e5),
