@@ -167,6 +167,8 @@ SCHEMA: dict[str, Spec] = {
     "guidance.omega": F("harmonic attitude frequency (Eq. 44)", "rad/s", 0.0, 1e3, lo_open=True),
     "guidance.waypoints": Spec("floats", "waypoints as [[x, y, z], ...] in world ENU", "m"),
     "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
+    "guidance.max_speed": F("speed limit of every leg: the cruise speed, DO_CHANGE_SPEED, DO_REPOSITION and mission "
+                            "leg speeds above it are flown at it (PX4's MPC_XY_VEL_MAX)", "m/s", 0.0, 100.0, lo_open=True),
     "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
     "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
     # flight tasks (guidance/flight_tasks.py): take-off, land, return (PX4's MIS_TAKEOFF_ALT, RTL_RETURN_ALT, MPC_LAND_SPEED)
