@@ -31,6 +31,8 @@ def test_mavproxy_fetches_params_and_shows_attitude(tmp_path):
             mp.do("param show SMC_K_PHI", r"SMC_K_PHI\s+1\.47")
             mp.do("status ATTITUDE", r"ATTITUDE \{time_boot_ms : \d+, roll : (\S+),")
             mp.do("mode LOITER", r"Got COMMAND_ACK: DO_SET_MODE: ACCEPTED")
+            mp.do("posctl", r"Got COMMAND_ACK: DO_SET_MODE: ACCEPTED")  # a bare name: the module answers first
+            assert "ERROR in command" not in mp.transcript(), mp.transcript()
         # judged while connected: MAVProxy's own shutdown is outside the rig's control
         assert "Traceback" not in mp.before_exit and "Exception" not in mp.before_exit, mp.before_exit
         assert rig.stop() == 0
