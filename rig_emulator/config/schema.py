@@ -180,7 +180,8 @@ SCHEMA: dict[str, Spec] = {
     "flc.d1_ux": F("d1 of virtual input uX (Table 5)", "", 0.0, 1.0, lo_open=True),
     "flc.d1_uy": F("d1 of virtual input uY (Table 5)", "", 0.0, 1.0, lo_open=True),
     "flc.position_rate_share": F("share of the desired velocity in the position FLC's error rate: 1 derivative on "
-                                 "the error (v_des - v), 0 derivative on the measurement (-v)", "", 0.0, 1.0),
+                                 "the error (v_des - v), 0 derivative on the measurement (-v); position errors only: a velocity "
+                                 "set-point with no position is tracked as v_des - v", "", 0.0, 1.0),
     "pid.attitude_kp": V3("attitude PID proportional gains", "1/s^2", 0.0, 1e5),
     "pid.attitude_ki": V3("attitude PID integral gains", "1/s^3", 0.0, 1e5),
     "pid.attitude_kd": V3("attitude PID derivative gains", "1/s", 0.0, 1e5),
@@ -197,6 +198,8 @@ SCHEMA: dict[str, Spec] = {
     "guidance.waypoints": Spec("floats", "waypoints as [[x, y, z], ...] in world ENU", "m",
                                values="a list of [x, y, z], each coordinate in [-1e+05, 1e+05]"),  # loader._check_waypoints
     "guidance.speed": F("waypoint leg speed that sizes each virtual line (Sec. 4-4)", "m/s", 0.0, 100.0, lo_open=True),
+    "guidance.max_speed": F("speed limit of every leg: the cruise speed, DO_CHANGE_SPEED, DO_REPOSITION and mission "
+                            "leg speeds above it are flown at it (PX4's MPC_XY_VEL_MAX)", "m/s", 0.0, 100.0, lo_open=True),
     "guidance.switching_radius": F("switch to the next waypoint below this position error (Sec. 4-4)", "m", 0.0, 100.0, lo_open=True),
     "guidance.min_leg_time": F("shortest time a virtual line may take", "s", 0.0, 1e4, lo_open=True),
     # flight tasks (guidance/flight_tasks.py): take-off, land, return (PX4's MIS_TAKEOFF_ALT, RTL_RETURN_ALT, MPC_LAND_SPEED)

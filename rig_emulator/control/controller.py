@@ -113,10 +113,16 @@ def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
         weight = cp.mass * cp.g
         if cp.pos_law == FLC:
             if cp.flc_rate_share != 1.0:  # issue 13: derivative on the measurement, partly or wholly
-                # (dex + vel) is the desired velocity, 0 where an offboard set-point leaves it free (NaN)
-                dex = cp.flc_rate_share * (dex + vel[0]) - vel[0]
-                dey = cp.flc_rate_share * (dey + vel[1]) - vel[1]
-                dez = cp.flc_rate_share * (dez + vel[2]) - vel[2]
+                # (dex + vel) is the desired velocity, 0 where an offboard set-point leaves it free (NaN).
+                # Only the derivative of a position error is taken partly on the measurement: an axis
+                # without a position reference (offboard velocity control) tracks v_des - v in full,
+                # else it would settle at share x v_des (s5-gcs, issue 15: 0.34 of a 0.5 m/s command)
+                if not math.isnan(ref[REF_POS]):
+                    dex = cp.flc_rate_share * (dex + vel[0]) - vel[0]
+                if not math.isnan(ref[REF_POS + 1]):
+                    dey = cp.flc_rate_share * (dey + vel[1]) - vel[1]
+                if not math.isnan(ref[REF_POS + 2]):
+                    dez = cp.flc_rate_share * (dez + vel[2]) - vel[2]
             # Eq. 37: uX, uY and the altitude correction of u1 from three fuzzy axes
             ux = flc_axis(ex, dex, cp.flc_x, cp.rule_table)
             uy = flc_axis(ey, dey, cp.flc_y, cp.rule_table)

@@ -429,7 +429,8 @@ class LiveRig:
                            offboard=current.offboard)
 
     def _cruise_speed(self, cfg: RigConfig) -> float:
-        return cfg["guidance.speed"] if self._speed_override is None else self._speed_override
+        speed = cfg["guidance.speed"] if self._speed_override is None else self._speed_override
+        return min(speed, cfg["guidance.max_speed"])  # PX4's MPC_XY_VEL_MAX caps DO_CHANGE_SPEED too
 
     def set_position_target(self, position, yaw: float | None = None) -> None:
         """Guided mode: hold the given world-ENU position (and yaw, rad) from the next step."""

@@ -279,9 +279,9 @@ def guidance_params(cfg: RigConfig, waypoints=None, radii=None, holds=None, spee
         waypoints=wp,
         radii=r,
         holds=h,
-        speeds=v,
+        speeds=np.minimum(v, cfg["guidance.max_speed"]),  # PX4's MPC_XY_VEL_MAX caps every leg
         free_xy=f,
-        speed=cfg["guidance.speed"],
+        speed=min(cfg["guidance.speed"], cfg["guidance.max_speed"]),
         min_leg_time=cfg["guidance.min_leg_time"],
         offboard=np.full(OFB_SIZE, np.nan),
     )

@@ -58,7 +58,7 @@ def test_param_list_set_and_load_are_exact(rig, relay, capsys, tmp_path):
     assert rig.server.rig.cfg["smc.k"][0] == 2.75
 
     f = tmp_path / "gains.params"
-    f.write_text("# QGroundControl\n1\t1\tSMC_K_THE\t1.25\t9\n1\t1\tWP_RADIUS\t0.125\t9\n1\t1\tGUI_SPEED\t0.75\t9\n")
+    f.write_text("# QGroundControl\n1\t1\tSMC_K_THE\t1.25\t9\n1\t1\tWP_RADIUS\t0.125\t9\n1\t1\tMPC_XY_CRUISE\t0.75\t9\n")
     t0 = time.monotonic()
     assert main(["param", "load", relay.client_url, str(f), "--timeout", "0.3", "--retries", "10"]) == 0
     t_load = time.monotonic() - t0

@@ -177,7 +177,9 @@ def change_speed(cmd, srv, channel):
         srv.rig.change_speed(None if v == -2.0 else v)
     except ValueError as exc:
         return refuse(srv, f"change speed refused: {exc}")
-    srv.event(f"cruise speed {'default' if v == -2.0 else f'{v:g} m/s'}")
+    limit = srv.rig.cfg["guidance.max_speed"]
+    capped = f" (limited to MPC_XY_VEL_MAX {limit:g} m/s)" if v != -2.0 and v > limit else ""
+    srv.event(f"cruise speed {'default' if v == -2.0 else f'{v:g} m/s'}{capped}")
     return ACCEPTED, []
 
 

@@ -10,8 +10,12 @@
   rates as feed-forward; with ATTITUDE_IGNORE the body rates are tracked (rate mode), an
   ignored axis at 0 rad/s; a message that ignores attitude and rates but gives the thrust
   changes only the thrust of the attitude or rate set-point being flown (as PX4 does).
-* SET_ACTUATOR_CONTROL_TARGET is refused: the rig's controllers always run (actuator-level
-  control belongs to the lockstep simulator interface).
+* SET_ACTUATOR_CONTROL_TARGET is refused, as by the PX4 the rig claims to be: PX4 removed
+  it in v1.14 (PX4-Autopilot PR #20837, with the actuator_controls mixer groups it fed);
+  PX4's direct actuator control since is uORB/ROS 2 only. The rig's own controllers always
+  run here; per-motor control belongs to the lockstep simulator interface
+  (HIL_ACTUATOR_CONTROLS, :mod:`rig_emulator.link.px4_simulator`), one motor disarmed to
+  DO_MOTOR_TEST, body rates with collective thrust to SET_ATTITUDE_TARGET.
 
 Every accepted set-point switches the reported mode to OFFBOARD and restarts the
 set-point timeout (:mod:`rig_emulator.link.commands.flight_monitors`). A set-point the rig cannot
@@ -125,8 +129,9 @@ class OffboardSetpoints:
         self._run(msg, channel, apply)
 
     def actuator_control(self, msg, channel) -> None:
-        self._refuse(msg, channel, "actuator-level control is not supported (the rig's controllers always run); "
-                                   "send SET_ATTITUDE_TARGET body rates and thrust")
+        self._refuse(msg, channel, "actuator-level control is not supported (removed from PX4 in v1.14; the rig's "
+                                   "controllers always run): send SET_ATTITUDE_TARGET body rates and thrust, or fly "
+                                   "the motors through the lockstep simulator interface")
 
     def handlers(self) -> dict:
         return {

@@ -23,6 +23,7 @@ from rig_emulator.link.state.directory import StateDir
 FILE = "params.json"
 FORMAT = "hilms-sil parameters"
 VERSION = 1
+RENAMED = {"GUI_SPEED": "MPC_XY_CRUISE"}  # names a stored document may still use -> the name served now
 
 
 def parse_params(doc: dict, state: StateDir, table: ParamTable) -> dict[str, float]:
@@ -32,6 +33,8 @@ def parse_params(doc: dict, state: StateDir, table: ParamTable) -> dict[str, flo
         raise state.error(FILE, "params", "expected an object of NAME: value")
     out = {}
     for name, value in params.items():
+        if name in RENAMED and RENAMED[name] not in params:
+            name = RENAMED[name]  # served under PX4's name since issue 15; rewritten so on the next save
         if name not in table.by_name:
             raise state.error(FILE, f"params.{name}", "no such parameter on this rig")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):

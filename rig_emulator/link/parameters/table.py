@@ -88,7 +88,8 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "pid.position_kd": ("PID_POS_KD", XYZ),
     "pid.integral_limit": ("PID_I_LIMIT", None),
     "guidance.omega": ("GUI_OMEGA", None),
-    "guidance.speed": ("GUI_SPEED", None),
+    "guidance.speed": ("MPC_XY_CRUISE", None),  # PX4: cruise speed of missions, RTL, goto (MAVSDK set/get_maximum_speed)
+    "guidance.max_speed": ("MPC_XY_VEL_MAX", None),  # PX4: QGroundControl's change-speed slider range
     "guidance.switching_radius": ("WP_RADIUS", None),
     "guidance.min_leg_time": ("GUI_MIN_LEG_T", None),
     "guidance.takeoff_altitude": ("MIS_TAKEOFF_ALT", None),  # PX4's names: MAVSDK and QGroundControl use them

@@ -1,6 +1,6 @@
 """MAVSDK-Python's Action plugin against the rig (``rig-emulator serve`` at 10x real time):
 MAVSDK sees a PX4 autopilot and sends PX4's commands. takeoff (MIS_TAKEOFF_ALT set through
-set_takeoff_altitude), goto_location (Hold, then DO_REPOSITION), set_current_speed, hold,
+set_takeoff_altitude), MPC_XY_CRUISE through the Param plugin, goto_location (Hold, then DO_REPOSITION), set_current_speed, hold,
 return_to_launch (AUTO.RTL: back home, land, disarm), land, reboot; a pymavlink observer
 on the TCP endpoint reads positions. Every action's result is printed (the report lists them)."""
 
@@ -12,6 +12,7 @@ import pytest
 import mavsdk  # noqa: F401 - a test requirement (pyproject test extra): fail, never skip, without it
 from mavsdk import ComponentType, Configuration, Mavsdk
 from mavsdk.plugins.action import Action, ActionError
+from mavsdk.plugins.param import Param
 from mavsdk.plugins.telemetry import Telemetry
 
 from protocol.dialect import mavlink as M
@@ -68,8 +69,25 @@ def test_mavsdk_actions_fly_the_rig():
             act("takeoff", action.takeoff)
             assert _wait(obs, lambda p: abs(p[2] - 1.5) < 0.1)
             lat, lon, alt = local_enu_to_global(home, [1.5, -1.0, 2.0])
+            # MPC_XY_CRUISE (the rig's leg speed; PX4's cruise speed, which MAVSDK 1.x's
+            # set_maximum_speed wrote; 4.1 has only the Param plugin for it), honoured by goto_location
+            param = Param(system)
+            param.set_param_float("MPC_XY_CRUISE", 0.8)
+            assert param.get_param_float("MPC_XY_CRUISE") == pytest.approx(0.8)
+            results["param.set_param_float('MPC_XY_CRUISE', 0.8)"] = "Success (read back 0.80)"
             act("goto_location", lambda: action.goto_location(lat, lon, alt, 0.0))
-            assert _wait(obs, lambda p: math.hypot(p[0] - 1.5, p[1] + 1.0) < 0.15 and abs(p[2] - 2.0) < 0.15)
+            peak, deadline = 0.0, time.monotonic() + 60
+            while time.monotonic() < deadline:
+                m = recv(obs, "LOCAL_POSITION_NED", 5.0)
+                peak = max(peak, math.hypot(m.vx, m.vy))
+                if math.hypot(m.y - 1.5, m.x + 1.0) < 0.15 and abs(-m.z - 2.0) < 0.15:
+                    break
+            else:
+                raise AssertionError("goto_location did not arrive")
+            results["goto_location"] += f" (peak horizontal speed {peak:.2f} m/s, MPC_XY_CRUISE 0.8)"
+            # the hilms rig overshoots the leg speed by ~20 % catching up with the virtual line: this leg
+            # peaked at 0.61 m/s with MPC_XY_CRUISE 0.5 and 0.97 with 0.8 (in-process, LiveRig.fly_path)
+            assert 0.75 < peak < 1.3, peak
             act("set_current_speed(1.0)", lambda: action.set_current_speed(1.0))
             act("hold", action.hold)
             act("return_to_launch", action.return_to_launch)
@@ -100,6 +118,6 @@ def test_mavsdk_actions_fly_the_rig():
         if name == "do_orbit":
             assert result != "Success"  # MAV_CMD_DO_ORBIT is not implemented: refused
         else:
-            assert result == "Success", (name, result)
+            assert result.startswith("Success"), (name, result)
     for line in ("] armed", "] mode AUTO.RTL", "landed: disarmed", "] rebooted"):  # the rig's console
         assert line in console, line

@@ -172,8 +172,8 @@ def test_recovery_without_reboot_once_level_and_the_estimator_is_healthy(rig, gc
 
 
 def test_reboot_keeps_parameters_and_mission(rig, gcs):
-    gcs.mav.param_set_send(1, 1, b"GUI_SPEED", 0.7, M.MAV_PARAM_TYPE_REAL32)
-    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "GUI_SPEED").param_value == pytest.approx(0.7)
+    gcs.mav.param_set_send(1, 1, b"MPC_XY_CRUISE", 0.7, M.MAV_PARAM_TYPE_REAL32)
+    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "MPC_XY_CRUISE").param_value == pytest.approx(0.7)
     items = [MissionItem(0, ENU, M.MAV_CMD_NAV_TAKEOFF, z=1.0, current=1),
              MissionItem(1, ENU, M.MAV_CMD_NAV_WAYPOINT, x=1.0, z=1.0)]
     assert MissionClient(gcs).upload(items) == M.MAV_MISSION_ACCEPTED
@@ -183,8 +183,8 @@ def test_reboot_keeps_parameters_and_mission(rig, gcs):
     assert command(gcs, M.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, 2).result == UNSUPPORTED  # shutdown
     assert command(gcs, M.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, 1).result == ACCEPTED
     assert recv(gcs, "ATTITUDE", 10, lambda m: m.time_boot_ms < 2000) is not None
-    gcs.mav.param_request_read_send(1, 1, b"GUI_SPEED", -1)
-    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "GUI_SPEED").param_value == pytest.approx(0.7)
+    gcs.mav.param_request_read_send(1, 1, b"MPC_XY_CRUISE", -1)
+    assert recv(gcs, "PARAM_VALUE", 10, lambda m: m.param_id == "MPC_XY_CRUISE").param_value == pytest.approx(0.7)
     assert len(MissionClient(gcs).download()) == 2
     assert recv(gcs, "MISSION_CURRENT", 10, lambda m: m.mission_state == M.MISSION_STATE_NOT_STARTED)
 
@@ -257,5 +257,33 @@ def test_gcs_loss_lands_in_a_mode_that_needs_the_ground_station():
             assert recv_text(gcs, lambda t: "landed" in t, timeout=60) is not None
             gcs.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
             assert recv_text(gcs, lambda t: "ground station regained" in t) is not None
+        finally:
+            gcs.close()
+
+
+def test_hardware_rig_comes_to_rest_by_friction_after_a_loss_of_control_trip_and_rearms():
+    """The default (hardware-faithful) plant: after a loss-of-control trip the motors stop, the
+    joint's friction (joint.viscous, joint.coulomb) brings the pendulous rig to rest at its rest
+    attitude (centre of gravity below the joint, inside ARM_MAX_TILT), and arming is accepted
+    again without a reboot once it is still and the estimate is healthy."""
+    with RigThread(speedup=8.0, airframe="hilms") as rig:
+        gcs = connect(rig.tcp_url)
+        gcs.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        try:
+            assert _until(gcs, lambda: command(gcs, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED, 60)
+            assert command(gcs, M.MAV_CMD_HILMS_SHOCK, 1, 30.0, 0.3).result == ACCEPTED
+            assert recv_text(gcs, lambda t: t.startswith("loss of control"), timeout=30) is not None
+            assert recv(gcs, "HEARTBEAT", 10, lambda m: m.system_status == M.MAV_STATE_EMERGENCY) is not None
+            spinning = recv(gcs, "ATTITUDE", 5)
+            assert max(abs(spinning.rollspeed), abs(spinning.pitchspeed), abs(spinning.yawspeed)) > math.radians(20)
+            assert command(gcs, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == DENIED  # still rotating
+            t_trip = recv(gcs, "ATTITUDE", 5).time_boot_ms
+            assert _until(gcs, lambda: command(gcs, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED, 120)
+            att = recv(gcs, "ATTITUDE", 5)
+            print(f"\nhilms: re-armed {(att.time_boot_ms - t_trip) / 1000:.1f} s (simulated) after the trip at roll "
+                  f"{math.degrees(att.roll):.1f} deg, pitch {math.degrees(att.pitch):.1f} deg")
+            assert max(abs(att.roll), abs(att.pitch)) < math.radians(20)
+            hb = recv(gcs, "HEARTBEAT", 10, lambda m: m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
+            assert hb.system_status == M.MAV_STATE_ACTIVE
         finally:
             gcs.close()

@@ -5,8 +5,6 @@ the parameter download falling back from FTP, ``fence`` enable/disable and a bre
 The rig runs in this process (RigThread at 4x) so the test can read where it flew."""
 
 import json
-import subprocess
-import sys
 import time
 
 import numpy as np
@@ -15,9 +13,8 @@ import pytest
 from gcs_tools.cli import main as rig_gcs
 from rig_emulator.link.ftp.component_metadata import parameter_metadata
 from rig_emulator.link.parameters.table import ParamTable
+from rig_emulator.testing.mavproxy import MAVProxySession
 from rig_emulator.testing.rig import RigThread
-
-from .test_link_mavproxy import MAVPROXY, _Lines
 
 pytestmark = [pytest.mark.slow]
 
@@ -27,24 +24,12 @@ def test_mavproxy_ftp_fence_and_wp_load(tmp_path):
     assert rig_gcs(["mission", "make", str(plan), "--rectangle", "5x3", "--altitude", "2"]) == 0
     assert "\t3\t16\t" in plan.read_text()  # GLOBAL_RELATIVE_ALT items: no local x/y for MAVProxy to scale
     with RigThread(speedup=4.0) as rig:
-        port = rig.tcp_url.rsplit(":", 1)[1]
-        proc = subprocess.Popen(
-            [sys.executable, str(MAVPROXY), f"--master=tcp:127.0.0.1:{port}", f"--state-basedir={tmp_path}"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path)
-        out = _Lines(proc)
-
-        def do(line, pattern, timeout=60.0):
-            proc.stdin.write(line + "\n")
-            proc.stdin.flush()
-            got = out.wait_for(pattern, timeout) if pattern else None
-            assert pattern is None or got is not None, f"{line!r}: no {pattern!r} in\n" + "".join(out.all)
-            return got
-
-        try:
+        with MAVProxySession(rig.tcp_url, tmp_path) as mp:
+            do = mp.do
             # MAVProxy asks for @PARAM/param.pck over FTP first; the rig NAKs it (not found) and the
             # parameter protocol delivers every parameter
-            got = out.wait_for(r"Received (\d+) parameters", 120)
-            assert got is not None and int(got.group(1)) == len(ParamTable()), "".join(out.all)
+            got = mp.wait_for(r"Received (\d+) parameters", 120)
+            assert got is not None and int(got.group(1)) == len(ParamTable()), mp.transcript()
             do("ftp list /metadata", r"parameters\.json\s+(\d+)")
             local = tmp_path / "parameters.json"
             wrote = do(f"ftp get /metadata/parameters.json {local}", r"Wrote (\d+) bytes")
@@ -72,15 +57,7 @@ def test_mavproxy_ftp_fence_and_wp_load(tmp_path):
             assert np.allclose(wps[1:], [[0, 0, 2], [5, 0, 2], [5, 3, 2], [0, 3, 2], [0, 0, 2]], atol=0.05), wps
             # a fence breach: FENCE_ALT_MAX below the hover height -> hold, reported
             do("param set FENCE_ALT_MAX 1", r"fence breach")
-            transcript = "".join(out.all)
-            assert "above the fence maximum 1 m" in "".join(out.all) or out.wait_for(r"fence maximum 1 m", 10)
-            before_exit = "".join(out.all)
-            proc.stdin.write("exit\n")
-            proc.stdin.close()
-            proc.wait(30)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-        assert "Traceback" not in before_exit, before_exit
+            transcript = mp.transcript()
+            assert "above the fence maximum 1 m" in mp.transcript() or mp.wait_for(r"fence maximum 1 m", 10)
+        assert "Traceback" not in mp.before_exit, mp.before_exit
         assert transcript

@@ -1,38 +1,25 @@
 """MAVProxy 1.8.75 flies the rig as a PX4 vehicle: every mode name it lists, takeoff, guided,
-return and land. MAVProxy is driven through its stdin and judged by its output (see
-test_link_mavproxy.py); the rig runs as ``rig-emulator serve`` at 4x real time.
+return and land. MAVProxy is driven through its stdin and judged by its output
+(rig_emulator.testing.mavproxy); the rig runs as ``rig-emulator serve`` at 4x real time.
 
 MAVProxy's own ``mode NAME`` cannot send a PX4 mode with pymavlink 2.4.50 (``set_mode_px4``
 gets px4_map's tuple: struct.error, nothing is sent); the test records that for the first
-name and sends each name's DO_SET_MODE the way a MAVProxy user can, ``long DO_SET_MODE
-<base> <main> <sub>`` with the numbers of pymavlink's px4_map. The results (what the rig did
-with every name) are printed."""
-
-import re
-import subprocess
-import sys
+name, loads the project's MAVProxy module ``gcs_tools.mavproxy_px4modes`` and sends every
+listed name with ``mode NAME``; one bare name (``posctl``) and the hand-typed fallback
+``long DO_SET_MODE <base> <main> <sub>`` are checked too. The results (what the rig did with
+every name) are printed; docs/GROUND_STATIONS.md quotes them."""
 
 import pytest
 from pymavlink import mavutil
 
-from protocol.geodesy import local_enu_to_global
-from rig_emulator.testing.rig import RigProcess, connect, recv
+from protocol.geodesy import Home, local_enu_to_global
 from rig_emulator.link.serve_args import DEFAULT_HOME
-from protocol.geodesy import Home
-
-from .test_link_mavproxy import MAVPROXY, _Lines
+from rig_emulator.testing.mavproxy import MAVProxySession
+from rig_emulator.testing.rig import RigProcess, connect, recv
 
 pytestmark = [pytest.mark.slow]
 FLOWN = {"POSCTL", "STABILIZED", "LOITER", "RTL", "LAND", "TAKEOFF", "OFFBOARD"}
-
-
-def _seen_or_wait(out, pattern, mark, timeout=3.0):
-    """A line matching ``pattern`` printed since line ``mark`` (already read or still to come)."""
-    for line in out.all[mark:]:
-        m = re.search(pattern, line)
-        if m:
-            return m
-    return out.wait_for(pattern, timeout=timeout)
+ACK = r"Got COMMAND_ACK: DO_SET_MODE: (\w+)"
 
 
 def _position(obs):
@@ -43,23 +30,29 @@ def _position(obs):
     return m.y, m.x, -m.z
 
 
+def _reported_mode(obs):
+    """The mode the rig's next HEARTBEAT reports (pymavlink's PX4 names)."""
+    while obs.recv_match(blocking=False) is not None:
+        pass
+    return mavutil.mode_string_v10(recv(obs, "HEARTBEAT", 5.0, lambda m: m.get_srcComponent() == 1))
+
+
+def _mode_result(out, mark, ack):
+    """ACCEPTED, or DENIED with the rig's reason (the STATUSTEXT may come just before or after the ACK)."""
+    text = None
+    if ack.group(1) != "ACCEPTED":
+        text = out.seen_or_wait(r"AP: ((?:mode|mission) refused: .*)", mark)
+    return ack.group(1) + (f" ({text.group(1).strip()})" if text else ""), text
+
+
 def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
     home = Home(*(float(v) for v in DEFAULT_HOME.split(",")))
     results = {}
     with RigProcess(speedup=4.0) as rig:
-        port = rig.tcp_url.rsplit(":", 1)[1]
         obs = connect(rig.tcp_url, source_system=254)
-        proc = subprocess.Popen(
-            [sys.executable, str(MAVPROXY), f"--master=tcp:127.0.0.1:{port}", f"--state-basedir={tmp_path}"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path)
-        out = _Lines(proc)
-
-        def send(line):
-            proc.stdin.write(line + "\n")
-            proc.stdin.flush()
-
-        try:
-            assert out.wait_for(r"Received \d+ parameters") is not None, "".join(out.all)
+        with MAVProxySession(rig.tcp_url, tmp_path) as out:
+            send = out.send
+            assert out.wait_for(r"Received \d+ parameters") is not None, out.transcript()
             send("mode")  # the list MAVProxy offers for this vehicle
             listed = out.wait_for(r"Available modes:\s+(.*)")
             assert listed is not None
@@ -67,24 +60,33 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
             assert set(names) == set(mavutil.px4_map)
             send("mode LOITER")  # MAVProxy's own path: fails inside pymavlink before sending
             err = out.wait_for(r"(required argument is not a float|struct\.error|Exception)", timeout=15)
-            results["mode LOITER (MAVProxy's mode command)"] = "client error: " + (err.group(1) if err else "none?")
+            results["mode LOITER (MAVProxy's own mode command)"] = "client error: " + (err.group(1) if err else "none?")
+            out.do("module load gcs_tools.mavproxy_px4modes", r"Loaded module gcs_tools\.mavproxy_px4modes")
+            before = _reported_mode(obs)
             for name in names:
-                base, main, sub = mavutil.px4_map[name]
                 mark = len(out.all)
-                send(f"long DO_SET_MODE {base} {main} {sub}")
-                ack = out.wait_for(r"Got COMMAND_ACK: DO_SET_MODE: (\w+)")
-                assert ack is not None, (name, "".join(out.all[-20:]))
-                text = None
-                if ack.group(1) != "ACCEPTED":  # the reason may come just before or after the ACK
-                    text = _seen_or_wait(out, r"AP: ((?:mode|mission) refused: .*)", mark)
-                results[f"mode {name}"] = ack.group(1) + (f" ({text.group(1).strip()})" if text else "")
+                ack = out.do(f"mode {name}", ACK)
+                results[f"mode {name}"], text = _mode_result(out, mark, ack)
+                reported = _reported_mode(obs)
+                results[f"mode {name}"] += f" -> HEARTBEAT {reported}"
                 if name in FLOWN:
-                    assert ack.group(1) == "ACCEPTED", (name, results)
-                else:
-                    assert ack.group(1) == "DENIED" and text is not None, (name, results)
-            send("long DO_SET_MODE 29 4 3")  # LOITER, then arm and take off to 2 m (AMSL for PX4: below home)
+                    assert ack.group(1) == "ACCEPTED" and reported == name, (name, results)
+                else:  # refused with the reason, the mode flown before kept
+                    assert ack.group(1) == "DENIED" and text is not None and reported == before, (name, results)
+                before = reported
+            mark = len(out.all)
+            out.do("posctl", r"Got COMMAND_ACK: DO_SET_MODE: ACCEPTED")  # a bare name, as MAVProxy offers it
+            assert _reported_mode(obs) == "POSCTL"
+            # MAVProxy's mode module (loaded before ours here) tries the name first and fails as above
+            own = out.seen_or_wait(r"ERROR in command: (.*)", mark, timeout=1.0)
+            assert own is not None
+            results["posctl (bare name)"] = f"ACCEPTED -> HEARTBEAT POSCTL (after MAVProxy's own '{own.group(1).strip()}')"
+            base, main, sub = mavutil.px4_map["LOITER"]
+            out.do(f"long DO_SET_MODE {base} {main} {sub}", r"Got COMMAND_ACK: DO_SET_MODE: ACCEPTED")
+            results[f"long DO_SET_MODE {base} {main} {sub} (LOITER by hand)"] = "ACCEPTED"
+            # in LOITER: arm and take off to 2 m (AMSL for PX4: below home)
             send("arm throttle")
-            assert out.wait_for(r"ARMED", timeout=20) is not None, "".join(out.all[-20:])
+            assert out.wait_for(r"ARMED", timeout=20) is not None, out.transcript(20)
             send("takeoff 2")
             assert out.wait_for(r"Using minimum takeoff altitude") is not None
             assert out.wait_for(r"takeoff complete", timeout=60) is not None
@@ -109,7 +111,7 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
                 if got is not None and float(got.group(1)) == 1.5:
                     break
             else:
-                raise AssertionError("MIS_TAKEOFF_ALT not set: " + "".join(out.all[-20:]))
+                raise AssertionError("MIS_TAKEOFF_ALT not set: " + out.transcript(20))
             send("arm throttle")
             send("takeoff 0")
             assert out.wait_for(r"takeoff complete", timeout=60) is not None
@@ -123,15 +125,7 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
             land_start = out.wait_for(r"land start refused: (.*)")
             assert land_start is not None
             results["land (DO_LAND_START)"] = "FAILED: " + (land_start.group(1).strip() if land_start else "?")
-            before_exit = "".join(out.all)
-            send("exit")
-            proc.stdin.close()
-            proc.wait(30)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-            obs.close()
+        obs.close()
         print("\nMAVProxy 1.8.75 on the rig:\n" + "\n".join(f"  {k}: {v}" for k, v in results.items()))
-        assert "Traceback" not in before_exit
+        assert "Traceback" not in out.before_exit
         assert rig.stop() == 0

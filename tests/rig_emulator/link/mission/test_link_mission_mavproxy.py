@@ -4,10 +4,7 @@ MAVProxy uploads line 0 of the file (ArduPilot's home line) as item 0; under the
 default (PX4) convention it is a waypoint at home, flown like the others; MAVProxy's
 ``param set MIS_ITEM0_HOME 1`` switches the rig to ArduPilot's convention (its effect on
 uploads is covered in test_link_mission_protocol.py). MAVProxy is driven through its stdin and
-judged by its output (see test_link_mavproxy.py)."""
-
-import subprocess
-import sys
+judged by its output (rig_emulator.testing.mavproxy)."""
 
 import numpy as np
 import pytest
@@ -15,9 +12,8 @@ from pymavlink import mavwp
 
 from protocol.dialect import mavlink as M
 from protocol.mission_items import item_from_message
+from rig_emulator.testing.mavproxy import MAVProxySession
 from rig_emulator.testing.rig import RigProcess, RigThread, connect, recv
-
-from ..test_link_mavproxy import MAVPROXY, _Lines
 
 pytestmark = [pytest.mark.slow]
 
@@ -76,43 +72,21 @@ def test_mavproxy_wp_load_and_list(tmp_path):
     path = tmp_path / "mission.txt"
     path.write_text(WPL)
     with RigProcess(speedup=1.0) as rig:
-        port = rig.tcp_url.rsplit(":", 1)[1]
-        proc = subprocess.Popen(
-            [sys.executable, str(MAVPROXY), f"--master=tcp:127.0.0.1:{port}", f"--state-basedir={tmp_path}"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path)
-        out = _Lines(proc)
-
-        def do(line, pattern, timeout=60.0):
-            proc.stdin.write(line + "\n")
-            proc.stdin.flush()
-            got = out.wait_for(pattern, timeout)
-            assert got is not None, f"{line!r}: no {pattern!r} in\n" + "".join(out.all)
-            return got
-
-        try:
-            assert out.wait_for(r"Received \d+ parameters") is not None, "".join(out.all)
-            do(f"wp load {path}", r"Sent all 6 waypoints")
-            do("wp list", r"Saved 6 waypoints")
-            listing = "".join(out.all)
+        with MAVProxySession(rig.tcp_url, tmp_path) as mp:
+            assert mp.wait_for(r"Received \d+ parameters") is not None, mp.transcript()
+            mp.do(f"wp load {path}", r"Sent all 6 waypoints")
+            mp.do("wp list", r"Saved 6 waypoints")
+            listing = mp.transcript()
             assert "16 3 35.7000200000 51.4000000000 2.000000" in listing, listing
             assert "178 3 " in listing and "21 3 " in listing
             # MAVProxy users switch the rig to ArduPilot's item-0-is-home convention themselves
-            proc.stdin.write("param set MIS_ITEM0_HOME 1\n")
+            mp.send("param set MIS_ITEM0_HOME 1")
             shown = None
             for _ in range(20):  # MAVProxy shows its cache; it changes when the rig's PARAM_VALUE echo arrives
-                proc.stdin.write("param show MIS_ITEM0_HOME\n")
-                proc.stdin.flush()
-                shown = out.wait_for(r"MIS_ITEM0_HOME\s+1(\.0)?\s*$", 1.0)
+                mp.send("param show MIS_ITEM0_HOME")
+                shown = mp.wait_for(r"MIS_ITEM0_HOME\s+1(\.0)?\s*$", 1.0)
                 if shown is not None:
                     break
-            assert shown is not None, "".join(out.all)
-            before_exit = "".join(out.all)
-            proc.stdin.write("exit\n")
-            proc.stdin.close()
-            proc.wait(30)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-        assert "Traceback" not in before_exit and "Exception" not in before_exit, before_exit
+            assert shown is not None, mp.transcript()
+        assert "Traceback" not in mp.before_exit and "Exception" not in mp.before_exit, mp.before_exit
         assert rig.stop() == 0

@@ -48,6 +48,17 @@ def test_params_and_mission_round_trip_exactly(tmp_path):
     d.close()
 
 
+def test_a_renamed_parameter_is_read_under_its_new_name(tmp_path):
+    (tmp_path / "params.json").write_text(json.dumps(
+        {"format": "hilms-sil parameters", "version": 1, "params": {"GUI_SPEED": 0.75}}))
+    d = StateDir(tmp_path)
+    store = ParamStore(d)
+    assert store.values == {"MPC_XY_CRUISE": 0.75}  # served under PX4's name since issue 15
+    store.save("WP_RADIUS", 0.125)
+    assert json.loads((tmp_path / "params.json").read_text())["params"] == {"MPC_XY_CRUISE": 0.75, "WP_RADIUS": 0.125}
+    d.close()
+
+
 def test_one_rig_per_directory_and_stale_temporaries_removed(tmp_path):
     (tmp_path / ".params.json.abc.tmp").write_text("half")
     first = StateDir(tmp_path)
