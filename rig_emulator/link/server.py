@@ -26,6 +26,7 @@ import time
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home
 from rig_emulator.link.telemetry import status as telemetry_status
+from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.endpoints.channel import Channel
 from rig_emulator.link.commands.dedup import CommandDedup
 from rig_emulator.link.commands import standard_modes
@@ -272,7 +273,7 @@ class RigServer:
 
     def _timesync(self, msg, channel: Channel) -> None:
         if msg.tc1 == 0:
-            now_ns = max(int(self.rig.time_s * 1e9), 1)  # tc1 = 0 would read as a request
+            now_ns = max(U.time_ns(self.rig.sim.time_us), 1)  # tc1 = 0 would read as a request
             channel.send(M.MAVLink_timesync_message(tc1=now_ns, ts1=msg.ts1))
 
     def _ftp(self, msg, channel: Channel) -> None:

@@ -152,13 +152,13 @@ def mission_current(snap, ctx):
 
 
 def system_time(snap, ctx):
-    return M.MAVLink_system_time_message(time_unix_usec=U.unix_usec(time.time()), time_boot_ms=U.time_boot_ms(snap.time_s))
+    return M.MAVLink_system_time_message(time_unix_usec=U.unix_usec(time.time()), time_boot_ms=U.time_boot_ms(snap.stamp_us))
 
 
 def servo_output_raw(snap, ctx):
     v_max = ctx.cfg["motors.voltage_max"]
     pwm = [U.pwm_us(v, v_max) for v in snap.voltage_commands] + [0] * 12
-    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.time_s), port=0, **{
+    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.stamp_us), port=0, **{
         f"servo{i + 1}_raw": pwm[i] for i in range(16)})
 
 
