@@ -67,8 +67,7 @@ class Px4SimulatorServer:
         g.service_io()
         g.report_faults()
         g.emit_streams()
-        for ep in g.endpoints:
-            ep.flush()
+        g.flush()
 
     def _ground_sockets(self) -> list:
         return [s for ep in self.ground.endpoints for s in ep.filenos()]
