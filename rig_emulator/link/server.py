@@ -40,7 +40,7 @@ from rig_emulator.link.commands.console import Console
 from rig_emulator.link.commands.flight_control import FlightControl
 from rig_emulator.link.commands.gcs_loss import GcsLoss
 from rig_emulator.link.endpoints.counters import LinkCounters
-from rig_emulator.link.endpoints.sockets import open_endpoint
+from rig_emulator.link.endpoints.sockets import Endpoint, open_endpoint
 from rig_emulator.link.telemetry.fault_report import FaultReporter
 from rig_emulator.link.ftp.component_metadata import metadata_files
 from rig_emulator.link.commands.flight_monitors import FenceMonitor, OffboardLossMonitor
@@ -100,8 +100,8 @@ class RigServer:
         self.ftp = FtpServer(FileStore(metadata_files()))
         self.endpoints = []
         try:
-            for spec in endpoints:
-                self.endpoints.append(open_endpoint(spec))
+            for spec in endpoints:  # connection strings, or endpoints opened already (a BootLink's)
+                self.endpoints.append(spec if isinstance(spec, Endpoint) else open_endpoint(spec))
         except Exception:
             self.close()
             raise
@@ -194,9 +194,7 @@ class RigServer:
             for event, key, data in ep.poll():
                 ck = (id(ep), key)
                 if event == "open":
-                    sched = StreamSchedule(default_rates(), self.chunk_s)
-                    self.channels[ck] = Channel(ep, key, self.sysid, COMPID, self.counters, sched, self.signing)
-                    self.channels[ck].send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
+                    self._open_channel(ep, key)
                 elif event == "closed":
                     self.channels.pop(ck, None)
                     self.ftp.forget(ck)
@@ -209,6 +207,21 @@ class RigServer:
             for ep in self.endpoints:
                 self.counters.drop("peer_limit", ep.dropped_peers)
                 ep.dropped_peers = 0
+
+    def _open_channel(self, ep, key) -> None:
+        sched = StreamSchedule(default_rates(), self.chunk_s)
+        channel = Channel(ep, key, self.sysid, COMPID, self.counters, sched, self.signing)
+        self.channels[(id(ep), key)] = channel
+        channel.send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
+
+    def adopt_peers(self, peers: dict) -> None:
+        """Channels for the peers a :class:`~rig_emulator.link.boot.BootLink` heard on these endpoints
+        (``{id(endpoint): [keys]}``, from :meth:`BootLink.hand_over`); each gets a HEARTBEAT now."""
+        for ep in self.endpoints:
+            for key in peers.get(id(ep), []):
+                if (id(ep), key) not in self.channels:
+                    self._open_channel(ep, key)
+        self.flush()
 
     def flush(self) -> None:
         """Hand what was queued to the sockets (UDP: the frames packed into datagrams); frames
