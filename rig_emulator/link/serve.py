@@ -39,6 +39,7 @@ import math
 import os
 import signal
 import time
+from typing import TYPE_CHECKING
 
 from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.link.boot import BootLink
@@ -48,15 +49,18 @@ from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
 from rig_emulator.link.serve_args import MAX_INSTANCE, instance_endpoints, instance_sysid, instance_state_dir
 from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args
 
+if TYPE_CHECKING:
+    from rig_emulator.simulation.live import LiveRig
+
 BOOT_DELAY_ENV = "HILMS_SERVE_BOOT_DELAY_S"  # test seam: see the module docstring
 
 
-def prepare_rig(cfg):
-    """A disarmed rig (a :class:`~rig_emulator.simulation.live.LiveRig`), compiled, holding its
-    initial position (arming makes it hover there)."""
-    from rig_emulator.simulation.live import LiveRig
+def prepare_rig(cfg, controller=None) -> LiveRig:
+    """A disarmed rig, compiled, holding its initial position (arming makes it hover there);
+    ``controller``: a controller plug-in object flying it instead of the config's ``controller.plugin``."""
+    from rig_emulator.simulation.live import LiveRig  # noqa: F811 (imported here: after the boot link speaks)
 
-    rig = LiveRig(cfg)
+    rig = LiveRig(cfg, controller=controller)
     rig.warm_up()
     rig.set_position_target(list(cfg["initial.position"]))
     return rig
