@@ -53,11 +53,12 @@ class _Lines:
 
 
 def test_mavproxy_waits_out_a_slow_start(tmp_path):
-    rig = RigProcess(speedup=1.0, wait_ready=False, env=SLOW_START)
+    """Over UDP: MAVProxy also parses the rig's packed datagrams (several frames each)."""
+    rig = RigProcess(speedup=1.0, extra_endpoints=["udpin:127.0.0.1:0"], wait_ready=False, env=SLOW_START)
     try:
-        port = rig.tcp_url.rsplit(":", 1)[1]
+        port = next(u for u in rig.urls if u.startswith("udpin:")).rsplit(":", 1)[1]
         proc = subprocess.Popen(
-            [sys.executable, str(MAVPROXY), f"--master=tcp:127.0.0.1:{port}", f"--state-basedir={tmp_path}"],
+            [sys.executable, str(MAVPROXY), f"--master=udpout:127.0.0.1:{port}", f"--state-basedir={tmp_path}"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path)
         out = _Lines(proc)
         try:
@@ -67,6 +68,9 @@ def test_mavproxy_waits_out_a_slow_start(tmp_path):
             assert got is not None, "".join(out.all)
             assert int(got.group(1)) == len(ParamTable())
             assert rig.ready or rig.wait_ready(30) is None
+            proc.stdin.write("status ATTITUDE\n")
+            proc.stdin.flush()
+            assert out.wait_for(r"ATTITUDE \{time_boot_ms : \d+, roll : ", timeout=30) is not None, "".join(out.all)
             before_exit = "".join(out.all)
             proc.stdin.write("exit\n")
             proc.stdin.close()
