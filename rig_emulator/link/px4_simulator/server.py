@@ -67,7 +67,8 @@ class Px4SimulatorServer:
         g.service_io()
         g.report_faults()
         g.emit_streams()
-        g.flush()
+        for ep in g.endpoints:
+            ep.flush()
 
     def _ground_sockets(self) -> list:
         return [s for ep in self.ground.endpoints for s in ep.filenos()]
