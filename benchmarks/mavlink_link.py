@@ -192,8 +192,8 @@ def mavlink_link(stats: dict[str, ProbeStats]) -> list[Metric]:
                    "msg/s", note="the rig's own count of messages handed to its sockets, over the client's window"),
         rig.metric("stress_rig_sent_per_wall_s", "telemetry, every stream at 200 Hz: messages the rig sent per wall s",
                    "msg/s", note="REQUEST_DATA_STREAM(ALL, 200 Hz): at most one of each stream per 5 ms chunk; "
-                                 "the rig's own count. A loop behind schedule runs the due chunks first and builds "
-                                 "telemetry once after them: telemetry thins, control keeps its rate"),
+                                 "the rig's own count. A loop behind schedule runs the due chunks in one tick, each "
+                                 "building its own telemetry (rates hold in simulated time)"),
         rig.metric("stress_msgs_per_wall_s", "telemetry, every stream at 200 Hz: messages the client decoded per wall s",
                    "msg/s", note="below the rig's figure when the pymavlink client cannot decode as fast "
                                  "(the rig then drops what its socket queue cannot hold)"),

@@ -46,13 +46,13 @@ def ensure_compiled() -> float:
 class ServedRig:
     """``RigProcess`` at ``speedup`` with a chunk timing log; use as a context manager."""
 
-    def __init__(self, speedup: float | str = 1.0, args=(), timing: bool = True):
+    def __init__(self, speedup: float | str = 1.0, args=(), timing: bool = True, extra_endpoints=()):
         testing = _testing()
         self._tmp = tempfile.mkdtemp(prefix="hilms-bench-rig-")
         self.timing_path = os.path.join(self._tmp, "timing.npz") if timing else None
         extra = ["--timing-log", self.timing_path] if timing else []
         t0 = time.perf_counter()
-        self.rig = testing.RigProcess(speedup=speedup, args=[*extra, *args])
+        self.rig = testing.RigProcess(speedup=speedup, args=[*extra, *args], extra_endpoints=extra_endpoints)
         self.start_s = time.perf_counter() - t0
         self.exit_code = None
 
@@ -63,6 +63,10 @@ class ServedRig:
     @property
     def tcp_url(self) -> str:
         return self.rig.tcp_url
+
+    @property
+    def urls(self) -> list[str]:
+        return self.rig.urls
 
     def stop(self) -> int:
         if self.exit_code is None:

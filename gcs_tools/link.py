@@ -89,6 +89,11 @@ class Link:
             # ground station only from what it sends.
             self.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, M.MAV_STATE_ACTIVE)
             msg = self.recv("HEARTBEAT", min(1.0, deadline - time.monotonic()))
+            if msg is not None and is_vehicle(msg) and msg.system_status == M.MAV_STATE_BOOT:
+                # a starting vehicle (the rig compiling its step loop: minutes on a cold cache) answers
+                # commands only once it runs: wait for it while it keeps saying so
+                deadline = max(deadline, time.monotonic() + timeout)
+                continue
             if msg is not None and is_vehicle(msg):
                 self.target_system = msg.get_srcSystem()
                 self.target_component = msg.get_srcComponent()

@@ -11,8 +11,8 @@ microsecond):
 * ``due``: the wall time the pacing scheduled the chunk for (``start`` when unpaced);
 * ``start``: the wall time just before the physics step (after the link was serviced);
 * ``end``: the wall time after the chunk's telemetry was built and handed to the sockets
-  (when the loop runs several chunks back to back to catch up, they share the ``end`` of the
-  last one: their telemetry is built once, after them);
+  (when the loop runs several chunks in one tick, each builds its own telemetry and they
+  share the ``end`` of the last one: the tick's frames go to the sockets together);
 * ``sim``: the simulated time at the chunk's start;
 * ``sent``: the link's count of messages handed to the sockets so far (after the chunk).
 

@@ -22,6 +22,15 @@ failsafes, landings) are printed one per line, ``rig-emulator: [  t_sim] text``
 or AUTO.MISSION): a script uploads, arms and starts at its own pace and the flight, stamped
 in simulated time from the start, is the same run after run (``rig-gcs reproduce`` flies
 the Fig. 19 rectangle this way).
+
+Start-up (issue 14): the endpoints open first and the ``rig-emulator: serving URL`` lines are
+printed at once; until the rig is built and its step loop compiled (minutes with a cold numba
+cache, about a second with a warm one) a :class:`~rig_emulator.link.boot.BootLink` speaks for
+it: HEARTBEAT with MAV_STATE_BOOT within the first seconds, STATUSTEXT "starting: compiling
+the step loop", commands TEMPORARILY_REJECTED (AUTOPILOT_VERSION answered). Then the rig takes
+the same sockets and peers over, prints ``rig-emulator: ready ...`` and its HEARTBEAT says
+MAV_STATE_STANDBY. Test seam: the environment variable ``HILMS_SERVE_BOOT_DELAY_S`` (seconds)
+delays building the rig by that much, standing in for a slow cold compile with a warm cache.
 """
 
 from __future__ import annotations
@@ -29,22 +38,29 @@ from __future__ import annotations
 import math
 import os
 import signal
+import time
+from typing import TYPE_CHECKING
 
 from rig_emulator.config.loader import ConfigError, load_config
-from rig_emulator.link.endpoints.sockets import EndpointError
-from rig_emulator.link.loop_timing import LoopTiming
-from rig_emulator.link.px4_simulator.serve_px4 import check_px4_args, serve_px4
+from rig_emulator.link.boot import BootLink
+from rig_emulator.link.endpoints.sockets import EndpointError, open_endpoint
+from rig_emulator.link.px4_simulator.serve_px4 import check_px4_args
 from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
 from rig_emulator.link.serve_args import MAX_INSTANCE, instance_endpoints, instance_sysid, instance_state_dir
 from rig_emulator.link.serve_setup import make_signing, open_state, signing_key_from_args
-from rig_emulator.link.server import RigServer
-from rig_emulator.physics.hardware import rest_attitude
-from rig_emulator.simulation.live import LiveRig
+
+if TYPE_CHECKING:
+    from rig_emulator.simulation.live import LiveRig
+
+BOOT_DELAY_ENV = "HILMS_SERVE_BOOT_DELAY_S"  # test seam: see the module docstring
 
 
-def prepare_rig(cfg) -> LiveRig:
-    """A disarmed rig, compiled, holding its initial position (arming makes it hover there)."""
-    rig = LiveRig(cfg)
+def prepare_rig(cfg, controller=None) -> LiveRig:
+    """A disarmed rig, compiled, holding its initial position (arming makes it hover there);
+    ``controller``: a controller plug-in object flying it instead of the config's ``controller.plugin``."""
+    from rig_emulator.simulation.live import LiveRig  # noqa: F811 (imported here: after the boot link speaks)
+
+    rig = LiveRig(cfg, controller=controller)
     rig.warm_up()
     rig.set_position_target(list(cfg["initial.position"]))
     return rig
@@ -91,30 +107,67 @@ def _log(text: str) -> None:
     print(f"rig-emulator: {text}", flush=True)
 
 
-def _serve(args, overrides: dict, state, signing) -> int:
+def _open_endpoints(specs: list[str]) -> list:
+    endpoints = []
+    try:
+        for spec in specs:
+            endpoints.append(open_endpoint(spec))
+    except EndpointError as exc:
+        for ep in endpoints:
+            ep.close()
+        raise ConfigError(str(exc)) from exc
+    return endpoints
+
+
+def _build_server(args, overrides: dict, state, signing, endpoints):
+    """The rig, compiled, and its server on ``endpoints`` (the boot link speaks meanwhile)."""
+    from rig_emulator.compile_notice import compile_notice
+    from rig_emulator.link.server import RigServer
+    from rig_emulator.physics.hardware import rest_attitude
+
+    delay = float(os.environ.get(BOOT_DELAY_ENV, "0") or 0.0)
+    if delay > 0.0:
+        time.sleep(delay)
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
-    rig = prepare_rig(cfg)
+    with compile_notice():
+        rig = prepare_rig(cfg)
     rest = rest_attitude(rig.sim.pp.hw, rig.sim.pp.g, math.radians(cfg["initial.euler_deg"][2]))
     if rest is not None:
         _log(f"disarmed, the rig hangs at roll {math.degrees(rest[0]):.1f} deg, pitch {math.degrees(rest[1]):.1f} deg "
              f"on its joint (its centre of gravity is off the joint; arming levels it)")
-    try:
-        server = RigServer(rig, args.mavlink or instance_endpoints(args.instance), sysid=args.sysid, home=args.home,
-                           speedup=args.speedup, chunk_s=chunk_seconds(args.chunk_ms, args.speedup),
-                           signing=signing, state=state, console=not getattr(args, "quiet", False))
-    except EndpointError as exc:
-        raise ConfigError(str(exc)) from exc
+    server = RigServer(rig, endpoints, sysid=args.sysid, home=args.home, speedup=args.speedup,
+                       chunk_s=chunk_seconds(args.chunk_ms, args.speedup), signing=signing, state=state,
+                       console=not getattr(args, "quiet", False))
     if state is not None:
-        try:
-            _log(state.restore(server))
-        except ConfigError:
-            server.close()
-            raise
+        _log(state.restore(server))
+    return rig, server
+
+
+def _serve(args, overrides: dict, state, signing) -> int:
+    t_start = time.monotonic()
+    endpoints = _open_endpoints(args.mavlink or instance_endpoints(args.instance))
+    boot = BootLink(endpoints, sysid=args.sysid).start()
+    for ep in endpoints:
+        print(f"rig-emulator: serving {ep.url}", flush=True)
+    try:
+        rig, server = _build_server(args, overrides, state, signing, endpoints)
+    except BaseException:
+        boot.hand_over()
+        for ep in endpoints:
+            ep.close()
+        raise
+    server.adopt_peers(boot.hand_over())
+    _log(f"ready: the rig runs ({time.monotonic() - t_start:.1f} s after start; "
+         f"{boot.rejected} commands were refused while it started)")
     server.hold_clock = bool(getattr(args, "start_paused", False))
     if args.timing_log:
+        from rig_emulator.link.loop_timing import LoopTiming
+
         server.timing = LoopTiming(server.chunk_s, args.speedup)
     runner = server
     if getattr(args, "px4_simulator", None):  # issue 16: the flight stack steps the plant (px4_simulator/)
+        from rig_emulator.link.px4_simulator.serve_px4 import serve_px4
+
         try:
             runner = serve_px4(args, server, rig, _log)
         except ConfigError:
@@ -122,8 +175,6 @@ def _serve(args, overrides: dict, state, signing) -> int:
             raise
     previous = {s: signal.signal(s, lambda *_: runner.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
-        for url in server.urls:
-            print(f"rig-emulator: serving {url}", flush=True)
         if runner is not server:
             print(f"rig-emulator: px4 simulator on {runner.transport.url}", flush=True)
         runner.run(args.duration)

@@ -1,13 +1,18 @@
 """The MAVLink rig: a :class:`LiveRig` served on one or more endpoints.
 
 The loop advances the physics in chunks (:attr:`RigServer.chunk_steps` steps, 5 ms of
-simulated time by default) and services the link between chunks: it reads every endpoint,
-handles each message at once (every command is ACKed before the next chunk), sends the
-streams that are due in simulated time, and sends HEARTBEAT at 1 Hz of wall-clock time.
+simulated time by default) and works in ticks: it services the link (reads every endpoint,
+handles each message at once: every command is ACKed before the next chunk), runs the
+chunks that are due, builds after each chunk the streams due in that chunk's simulated
+time (so stream rates hold in simulated time however often the link is serviced), and hands
+the tick's frames to the sockets together (UDP: packed into few datagrams,
+:mod:`rig_emulator.link.endpoints.sockets`). HEARTBEAT goes out at 1 Hz of wall-clock time.
 With ``speedup`` > 0 the simulated clock is paced against ``time.monotonic()`` scaled by
-the speed-up (1 = real time); with ``speedup`` = 0 the rig runs as fast as it can. When
-the host cannot keep up the pacing re-anchors instead of bursting (counted in
-``overruns``).
+the speed-up (1 = real time) and a tick runs the chunks due (one when on time, up to
+:data:`CATCH_UP_CHUNKS` when behind); with ``speedup`` = 0 the rig runs as fast as it can,
+a tick running chunks for :data:`TICK_WALL_S` of wall time (at most
+:data:`CATCH_UP_CHUNKS`). When the host cannot keep up the pacing re-anchors instead of
+bursting (counted in ``overruns``).
 
 Bad input never stops the loop: unparsable bytes, bad CRCs, messages for other systems and
 unusable fields are counted in :attr:`RigServer.counters` and dropped.
@@ -26,6 +31,7 @@ import time
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home
 from rig_emulator.link.telemetry import status as telemetry_status
+from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.endpoints.channel import Channel
 from rig_emulator.link.commands.dedup import CommandDedup
 from rig_emulator.link.commands import standard_modes
@@ -34,7 +40,7 @@ from rig_emulator.link.commands.console import Console
 from rig_emulator.link.commands.flight_control import FlightControl
 from rig_emulator.link.commands.gcs_loss import GcsLoss
 from rig_emulator.link.endpoints.counters import LinkCounters
-from rig_emulator.link.endpoints.sockets import open_endpoint
+from rig_emulator.link.endpoints.sockets import Endpoint, open_endpoint
 from rig_emulator.link.telemetry.fault_report import FaultReporter
 from rig_emulator.link.ftp.component_metadata import metadata_files
 from rig_emulator.link.commands.flight_monitors import FenceMonitor, OffboardLossMonitor
@@ -54,6 +60,7 @@ COMPID = M.MAV_COMP_ID_AUTOPILOT1
 HEARTBEAT_PERIOD_S = 1.0
 MAX_LAG_S = 0.25  # further behind real time than this: re-anchor the pacing
 CATCH_UP_CHUNKS = 10  # at most this many chunks due at once are run before the link is serviced again
+TICK_WALL_S = 0.01  # unpaced (speed-up 0): the link is serviced at least this often (wall-clock seconds)
 STATUSTEXT_LEN = 50
 
 
@@ -93,8 +100,8 @@ class RigServer:
         self.ftp = FtpServer(FileStore(metadata_files()))
         self.endpoints = []
         try:
-            for spec in endpoints:
-                self.endpoints.append(open_endpoint(spec))
+            for spec in endpoints:  # connection strings, or endpoints opened already (a BootLink's)
+                self.endpoints.append(spec if isinstance(spec, Endpoint) else open_endpoint(spec))
         except Exception:
             self.close()
             raise
@@ -187,9 +194,7 @@ class RigServer:
             for event, key, data in ep.poll():
                 ck = (id(ep), key)
                 if event == "open":
-                    sched = StreamSchedule(default_rates(), self.chunk_s)
-                    self.channels[ck] = Channel(ep, key, self.sysid, COMPID, self.counters, sched, self.signing)
-                    self.channels[ck].send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
+                    self._open_channel(ep, key)
                 elif event == "closed":
                     self.channels.pop(ck, None)
                     self.ftp.forget(ck)
@@ -197,11 +202,36 @@ class RigServer:
                     channel = self.channels[ck]
                     for msg in channel.receive(data):
                         self.handle(msg, channel)
-            ep.flush()
+        self.flush()
         if any(ep.dropped_peers for ep in self.endpoints):
             for ep in self.endpoints:
                 self.counters.drop("peer_limit", ep.dropped_peers)
                 ep.dropped_peers = 0
+
+    def _open_channel(self, ep, key) -> None:
+        sched = StreamSchedule(default_rates(), self.chunk_s)
+        channel = Channel(ep, key, self.sysid, COMPID, self.counters, sched, self.signing)
+        self.channels[(id(ep), key)] = channel
+        channel.send(telemetry_status.heartbeat(self.snapshot(), self.ctx))
+
+    def adopt_peers(self, peers: dict) -> None:
+        """Channels for the peers a :class:`~rig_emulator.link.boot.BootLink` heard on these endpoints
+        (``{id(endpoint): [keys]}``, from :meth:`BootLink.hand_over`); each gets a HEARTBEAT now."""
+        for ep in self.endpoints:
+            for key in peers.get(id(ep), []):
+                if (id(ep), key) not in self.channels:
+                    self._open_channel(ep, key)
+        self.flush()
+
+    def flush(self) -> None:
+        """Hand what was queued to the sockets (UDP: the frames packed into datagrams); frames
+        a socket could not take count as ``tx_overflow`` instead of sent."""
+        for ep in self.endpoints:
+            ep.flush()
+            if ep.tx_dropped:
+                self.counters.sent -= ep.tx_dropped
+                self.counters.drop("tx_overflow", ep.tx_dropped)
+                ep.tx_dropped = 0
 
     def handle(self, msg, channel: Channel) -> None:
         """Act on one decoded message from ``channel`` (or count why not)."""
@@ -272,7 +302,7 @@ class RigServer:
 
     def _timesync(self, msg, channel: Channel) -> None:
         if msg.tc1 == 0:
-            now_ns = max(int(self.rig.time_s * 1e9), 1)  # tc1 = 0 would read as a request
+            now_ns = max(U.time_ns(self.rig.sim.time_us), 1)  # tc1 = 0 would read as a request
             channel.send(M.MAVLink_timesync_message(tc1=now_ns, ts1=msg.ts1))
 
     def _ftp(self, msg, channel: Channel) -> None:
@@ -369,17 +399,25 @@ class RigServer:
                     self.overruns += 1
                     self.counters.pacing_reset(lag)
                     lag = self.chunk_s
-            # Behind schedule (a flood of input, a slow request): run the chunks that are due before the
-            # link gets its next turn, so control keeps its rate and telemetry thins instead.
-            for _ in range(1 if self.speedup <= 0.0 else max(1, min(int(lag / self.chunk_s), CATCH_UP_CHUNKS))):
+            # One tick: the chunks that are due (behind schedule, e.g. after a flood of input or a slow
+            # request: up to CATCH_UP_CHUNKS) or, unpaced, as many as fit in TICK_WALL_S; each chunk
+            # builds the telemetry due in its own simulated time (rates hold however the loop is
+            # serviced), and the tick's frames go to the sockets together (packed datagrams).
+            if self.speedup > 0.0:
+                n_chunks = max(1, min(int(lag / self.chunk_s), CATCH_UP_CHUNKS))
+            else:
+                n_chunks = CATCH_UP_CHUNKS
+            tick_end = t0 + TICK_WALL_S
+            for _ in range(n_chunks):
                 if self.rig.time_s >= t_end:
                     break
                 if self.timing is not None:
                     self.timing.begin(wall0, sim0, self.rig.time_s)
                 self.step_chunk()
-            self.emit_streams()
-            for ep in self.endpoints:
-                ep.flush()
+                self.emit_streams()
+                if self.speedup <= 0.0 and time.monotonic() >= tick_end:
+                    break
+            self.flush()
             t1 = time.monotonic()
             busy += t1 - t0
             if self.timing is not None:
@@ -391,6 +429,7 @@ class RigServer:
 
     def _drain(self, timeout_s: float = 0.5) -> None:
         """Give queued TCP bytes (e.g. the last ACKs) a moment to leave before closing."""
+        self.flush()
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline and any(
                 getattr(c, "tx", None) for ep in self.endpoints for c in getattr(ep, "clients", {}).values()):

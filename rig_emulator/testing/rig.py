@@ -196,7 +196,10 @@ class RigProcess(_RigBase):
     """``rig-emulator serve`` as a subprocess with a tcpin endpoint on a free port."""
 
     def __init__(self, speedup: float | str = 1.0, extra_endpoints=(), args=(), tcp: bool = True, state_dir=None,
-                 airframe: str | None = TEST_AIRFRAME):
+                 airframe: str | None = TEST_AIRFRAME, wait_ready: bool = True, env=None):
+        """Starts the rig and returns once it printed its endpoints' URLs and, with ``wait_ready``,
+        ``rig-emulator: ready`` (its step loop compiled; before that it answers as starting, in
+        MAV_STATE_BOOT: :mod:`rig_emulator.link.boot`). ``env``: extra environment variables."""
         endpoints = (["tcpin:127.0.0.1:0"] if tcp else []) + list(extra_endpoints)
         cmd = [sys.executable, "-m", "rig_emulator", "serve", "--speedup", str(speedup)]
         if airframe is not None and not any(str(a).startswith("--airframe") for a in args):
@@ -210,7 +213,7 @@ class RigProcess(_RigBase):
         elif not any(a in ("--state-dir", "--no-persist") or str(a).startswith("--state-dir=") for a in args):
             self._own_state_dir = tempfile.mkdtemp(prefix="hilms-rig-state-")
             cmd += ["--state-dir", self._own_state_dir]
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        env = dict(os.environ, PYTHONUNBUFFERED="1", **(env or {}))
         self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
         self._lines: queue.Queue = queue.Queue()
         self.output: list[str] = []
@@ -229,6 +232,27 @@ class RigProcess(_RigBase):
                 raise RuntimeError(f"rig exited with {self.proc.wait()}: {self.proc.stderr.read()}")
             if line.startswith("rig-emulator: serving "):
                 self.urls.append(line.split()[-1])
+        self.ready = False
+        if wait_ready:
+            try:
+                self.wait_ready(max(deadline - time.monotonic(), 0.01))
+            except RuntimeError:
+                self.stop(signal.SIGKILL)
+                raise
+
+    def wait_ready(self, timeout: float = START_TIMEOUT_S) -> None:
+        """Wait for the ``rig-emulator: ready`` line (RuntimeError when the rig exits or ``timeout`` passes)."""
+        deadline = time.monotonic() + timeout
+        while not self.ready:
+            try:
+                line = self._lines.get(timeout=max(deadline - time.monotonic(), 0.01))
+            except queue.Empty:
+                raise RuntimeError(f"rig not ready within {timeout:g} s: {self.output[-5:]}") from None
+            if line is None:
+                self._remove_own_state_dir()
+                raise RuntimeError(f"rig exited with {self.proc.wait()}: {self.proc.stderr.read()}")
+            if line.startswith("rig-emulator: ready"):
+                self.ready = True
 
     def _pump(self) -> None:
         for line in self.proc.stdout:

@@ -27,6 +27,7 @@ import zlib
 from protocol.dialect import mavlink as M
 from rig_emulator.config.loader import load_config
 from rig_emulator.link.parameters.table import ParamTable
+from rig_emulator.link.telemetry import units as U
 
 GENERAL_PATH = "metadata/general.json"
 PARAMETERS_PATH = "metadata/parameters.json"
@@ -120,7 +121,7 @@ def metadata_files() -> dict[str, bytes]:
 # --- the messages that say where the files are (MAV_CMD_REQUEST_MESSAGE) ---------------------------------
 def component_metadata_message(snap, ctx):
     """COMPONENT_METADATA: URI and CRC32 of the general metadata file."""
-    return M.MAVLink_component_metadata_message(time_boot_ms=int(snap.time_s * 1000.0) % 2**32,
+    return M.MAVLink_component_metadata_message(time_boot_ms=U.time_boot_ms(snap.stamp_us),
                                                 file_crc=crc32(general_metadata()),
                                                 uri=mftp_uri(GENERAL_PATH).encode("ascii"))
 
@@ -128,6 +129,6 @@ def component_metadata_message(snap, ctx):
 def component_information_message(snap, ctx):
     """COMPONENT_INFORMATION (deprecated form, for older ground stations): the same file, no peripherals."""
     return M.MAVLink_component_information_message(
-        time_boot_ms=int(snap.time_s * 1000.0) % 2**32, general_metadata_file_crc=crc32(general_metadata()),
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), general_metadata_file_crc=crc32(general_metadata()),
         general_metadata_uri=mftp_uri(GENERAL_PATH).encode("ascii"), peripherals_metadata_file_crc=0,
         peripherals_metadata_uri=b"")

@@ -40,7 +40,7 @@ def attitude(snap, ctx):
     roll, pitch, yaw = mavlink_euler_from_rwb(snap.rotation)
     p, q, r = mavlink_body_rates_from_omega_b(snap.body_rates)
     return mavlink.MAVLink_attitude_message(
-        time_boot_ms=U.time_boot_ms(snap.time_s), roll=roll, pitch=pitch, yaw=yaw,
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), roll=roll, pitch=pitch, yaw=yaw,
         rollspeed=float(p), pitchspeed=float(q), yawspeed=float(r))
 
 
@@ -48,7 +48,7 @@ def attitude_quaternion(snap, ctx):
     w, x, y, z = mavlink_quaternion_from_rwb(snap.rotation)
     p, q, r = mavlink_body_rates_from_omega_b(snap.body_rates)
     return mavlink.MAVLink_attitude_quaternion_message(
-        time_boot_ms=U.time_boot_ms(snap.time_s), q1=float(w), q2=float(x), q3=float(y), q4=float(z),
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), q1=float(w), q2=float(x), q3=float(y), q4=float(z),
         rollspeed=float(p), pitchspeed=float(q), yawspeed=float(r), repr_offset_q=[0.0, 0.0, 0.0, 0.0])
 
 
@@ -56,7 +56,7 @@ def attitude_target(snap, ctx):
     q = mavlink_quaternion_from_rwb(rwb_from_paper_euler(*snap.euler_target))
     p, qr, r = body_rates_from_paper_euler_rates(snap.euler_target, snap.euler_rate_target)
     return mavlink.MAVLink_attitude_target_message(
-        time_boot_ms=U.time_boot_ms(snap.time_s), type_mask=0, q=[float(v) for v in q],
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), type_mask=0, q=[float(v) for v in q],
         body_roll_rate=p, body_pitch_rate=qr, body_yaw_rate=r, thrust=thrust_fraction(snap.u[0], ctx.cfg))
 
 
@@ -64,6 +64,6 @@ def hilms_controller_state(snap, ctx):
     s = snap.sliding_surfaces
     phi_d, theta_d, psi_d = snap.euler_target
     return mavlink.MAVLink_hilms_controller_state_message(
-        time_usec=U.time_usec(snap.time_s), strategy=STRATEGIES.index(ctx.cfg["control.strategy"]),
+        time_usec=U.time_usec(snap.stamp_us), strategy=STRATEGIES.index(ctx.cfg["control.strategy"]),
         s_phi=s[0], s_theta=s[1], s_psi=s[2], phi_des=phi_d, theta_des=theta_d, psi_des=psi_d,
         u1=snap.u[0], u2=snap.u[1], u3=snap.u[2], u4=snap.u[3], flags=snap.flags & 0xFF)

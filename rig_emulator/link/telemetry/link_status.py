@@ -65,7 +65,7 @@ def status_values(counters, cfg) -> dict[str, int]:
 
 def link_status(snap, ctx) -> list:
     """The NAMED_VALUE_INT messages (an ON_REQUEST builder: ``(snapshot, ctx)``)."""
-    t = U.time_boot_ms(snap.time_s)
+    t = U.time_boot_ms(snap.stamp_us)
     return [M.MAVLink_named_value_int_message(time_boot_ms=t, name=name.encode("ascii"),
                                               value=U.clamp_int(value, *U.INT32))
             for name, value in status_values(ctx.counters, ctx.cfg).items()]

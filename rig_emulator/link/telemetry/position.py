@@ -41,7 +41,7 @@ def local_position_ned(snap, ctx):
     x, y, z = enu_to_ned(snap.position)
     vx, vy, vz = enu_to_ned(snap.velocity)
     return mavlink.MAVLink_local_position_ned_message(
-        time_boot_ms=U.time_boot_ms(snap.time_s), x=float(x), y=float(y), z=float(z),
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), x=float(x), y=float(y), z=float(z),
         vx=float(vx), vy=float(vy), vz=float(vz))
 
 
@@ -55,7 +55,7 @@ def position_target_local_ned(snap, ctx):
         pos, vel = enu_to_ned(snap.position_target), enu_to_ned(snap.velocity_target)
     yaw = paper_euler_to_mavlink(*snap.euler_target)[2]
     return mavlink.MAVLink_position_target_local_ned_message(
-        time_boot_ms=U.time_boot_ms(snap.time_s), coordinate_frame=mavlink.MAV_FRAME_LOCAL_NED, type_mask=mask,
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), coordinate_frame=mavlink.MAV_FRAME_LOCAL_NED, type_mask=mask,
         x=float(pos[0]), y=float(pos[1]), z=float(pos[2]), vx=float(vel[0]), vy=float(vel[1]), vz=float(vel[2]),
         afx=0.0, afy=0.0, afz=0.0, yaw=yaw, yaw_rate=0.0)
 
@@ -64,7 +64,7 @@ def global_position_int(snap, ctx):
     lat, lon, alt = _global(snap, ctx)
     vn, ve, vd = enu_to_ned(snap.velocity)
     return mavlink.MAVLink_global_position_int_message(
-        time_boot_ms=U.time_boot_ms(snap.time_s), lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt),
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt),
         relative_alt=U.mm(alt - ctx.home.alt_m), vx=U.cm_s_i16(vn), vy=U.cm_s_i16(ve), vz=U.cm_s_i16(vd),
         hdg=U.heading_rad_to_cdeg(_yaw(snap)))
 
@@ -76,7 +76,7 @@ def gps_raw_int(snap, ctx):
     cog = U.heading_rad_to_cdeg(math.atan2(ve, vn)) if ground_speed > 0.01 else U.UINT16_UNKNOWN
     accuracy_mm = U.mm(GPS_ACCURACY_M)
     return mavlink.MAVLink_gps_raw_int_message(
-        time_usec=U.time_usec(snap.time_s), fix_type=mavlink.GPS_FIX_TYPE_3D_FIX, lat=U.deg_e7(lat), lon=U.deg_e7(lon),
+        time_usec=U.time_usec(snap.stamp_us), fix_type=mavlink.GPS_FIX_TYPE_3D_FIX, lat=U.deg_e7(lat), lon=U.deg_e7(lon),
         alt=U.mm(alt), eph=int(GPS_DOP * 100), epv=int(GPS_DOP * 100), vel=U.cm_s_u16(ground_speed), cog=cog,
         satellites_visible=GPS_SATELLITES, alt_ellipsoid=U.mm(alt), h_acc=accuracy_mm, v_acc=accuracy_mm,
         vel_acc=accuracy_mm, hdg_acc=0, yaw=0)
@@ -90,7 +90,7 @@ def home_position(snap, ctx):
     return mavlink.MAVLink_home_position_message(
         latitude=U.deg_e7(lat), longitude=U.deg_e7(lon), altitude=U.mm(alt),
         x=float(n), y=float(e), z=float(d), q=[1.0, 0.0, 0.0, 0.0], approach_x=0.0, approach_y=0.0, approach_z=0.0,
-        time_usec=U.time_usec(snap.time_s))
+        time_usec=U.time_usec(snap.stamp_us))
 
 
 def vfr_hud(snap, ctx):

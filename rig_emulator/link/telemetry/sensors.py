@@ -18,7 +18,7 @@ def _scaled(cls, snap, ctx, module: int):
     r = ctx.readings(snap)
     a, g, m = r.accel[module], r.gyro[module], r.mag[module]
     return cls(
-        time_boot_ms=U.time_boot_ms(snap.time_s),
+        time_boot_ms=U.time_boot_ms(snap.stamp_us),
         xacc=U.milli_g(a[0]), yacc=U.milli_g(a[1]), zacc=U.milli_g(a[2]),
         xgyro=U.milli_rad_s(g[0]), ygyro=U.milli_rad_s(g[1]), zgyro=U.milli_rad_s(g[2]),
         xmag=U.milli_gauss(m[0]), ymag=U.milli_gauss(m[1]), zmag=U.milli_gauss(m[2]), temperature=0)
@@ -44,7 +44,7 @@ def highres_imu(snap, ctx):
     r = ctx.readings(snap)
     a, g, m = r.fused_accel, r.fused_gyro, r.fused_mag
     return mavlink.MAVLink_highres_imu_message(
-        time_usec=U.time_usec(snap.time_s), xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
+        time_usec=U.time_usec(snap.stamp_us), xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
         xgyro=float(g[0]), ygyro=float(g[1]), zgyro=float(g[2]),
         xmag=U.gauss(m[0]), ymag=U.gauss(m[1]), zmag=U.gauss(m[2]),
         abs_pressure=0.0, diff_pressure=0.0, pressure_alt=0.0, temperature=0.0,
@@ -57,7 +57,7 @@ def hilms_imu_module(snap, ctx):
     out = []
     for i, raw in enumerate(r.imu_raw_counts):
         out.append(mavlink.MAVLink_hilms_imu_module_message(
-            time_usec=U.time_usec(snap.time_s), module_index=i,
+            time_usec=U.time_usec(snap.stamp_us), module_index=i,
             gyro_raw=[U.raw_count_i16(c) for c in raw[0:3]], accel_raw=[U.raw_count_i16(c) for c in raw[3:6]],
             mag_raw=[U.raw_count_i16(c) for c in raw[6:9]],
             fault=int(r.imu_faults[i])))
@@ -75,7 +75,7 @@ def _load_health(snap, readings) -> int:
 def hilms_load_cells(snap, ctx):
     r = ctx.readings(snap)
     return mavlink.MAVLink_hilms_load_cells_message(
-        time_usec=U.time_usec(snap.time_s), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts],
+        time_usec=U.time_usec(snap.stamp_us), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts],
         force_grf=[float(f) for f in r.load_force_grf], thrust_n=[float(f) for f in r.load_thrust_n],
         health=_load_health(snap, r))
 
@@ -83,6 +83,6 @@ def hilms_load_cells(snap, ctx):
 def named_value_float(snap, ctx):
     """HILMS_LOAD_CELLS for stock ground stations: filtered thrust per arm (N) as LC1_N..LC4_N."""
     r = ctx.readings(snap)
-    t = U.time_boot_ms(snap.time_s)
+    t = U.time_boot_ms(snap.stamp_us)
     return [mavlink.MAVLink_named_value_float_message(time_boot_ms=t, name=name.encode("ascii"), value=float(f))
             for name, f in zip(LOAD_CELL_NAMES, r.load_thrust_n)]

@@ -34,12 +34,12 @@ beyond its failsafe limit (before the hold time has passed), else ACTIVE (armed)
 from __future__ import annotations
 
 import time
-from importlib import metadata
 
 from protocol.dialect import mavlink
 from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_RATE, INVALID_ACCEL, INVALID_GYRO, INVALID_MAG
 from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.telemetry.power import supply_fields
+from rig_emulator.link.telemetry.identity import CAPABILITIES, autopilot_version_message  # noqa: F401 (CAPABILITIES: re-exported)
 
 M = mavlink
 GYRO, ACCEL, MAG = M.MAV_SYS_STATUS_SENSOR_3D_GYRO, M.MAV_SYS_STATUS_SENSOR_3D_ACCEL, M.MAV_SYS_STATUS_SENSOR_3D_MAG
@@ -52,25 +52,6 @@ PRESENT = (GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON | CONTROL_BITS
            | M.MAV_SYS_STATUS_GEOFENCE)
 SENSOR_BITS = GYRO | ACCEL | MAG | GYRO2 | ACCEL2 | MAG2 | ALWAYS_ON
 _KINDS = ((GYRO, GYRO2, INVALID_GYRO), (ACCEL, ACCEL2, INVALID_ACCEL), (MAG, MAG2, INVALID_MAG))
-CAPABILITIES = (M.MAV_PROTOCOL_CAPABILITY_MISSION_INT | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
-                | M.MAV_PROTOCOL_CAPABILITY_MAVLINK2 | M.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
-                | M.MAV_PROTOCOL_CAPABILITY_SET_ATTITUDE_TARGET | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
-                | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT | M.MAV_PROTOCOL_CAPABILITY_FTP)
-
-
-def _version_number(text: str) -> int:
-    """'1.2.3' -> 0x01020300 (major, minor, patch, FIRMWARE_VERSION_TYPE_DEV = 0)."""
-    parts = [int(p) if p.isdigit() else 0 for p in text.split(".")[:3]] + [0, 0, 0]
-    return (parts[0] & 0xFF) << 24 | (parts[1] & 0xFF) << 16 | (parts[2] & 0xFF) << 8
-
-
-def _package_version() -> str:
-    try:
-        return metadata.version("hilms-sil")
-    except metadata.PackageNotFoundError:
-        return "0.0.0"
-
-
 def system_status(snap) -> int:
     """MAV_STATE for HEARTBEAT (module doc)."""
     f = snap.faults
@@ -152,19 +133,15 @@ def mission_current(snap, ctx):
 
 
 def system_time(snap, ctx):
-    return M.MAVLink_system_time_message(time_unix_usec=U.unix_usec(time.time()), time_boot_ms=U.time_boot_ms(snap.time_s))
+    return M.MAVLink_system_time_message(time_unix_usec=U.unix_usec(time.time()), time_boot_ms=U.time_boot_ms(snap.stamp_us))
 
 
 def servo_output_raw(snap, ctx):
     v_max = ctx.cfg["motors.voltage_max"]
     pwm = [U.pwm_us(v, v_max) for v in snap.voltage_commands] + [0] * 12
-    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.time_s), port=0, **{
+    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.stamp_us), port=0, **{
         f"servo{i + 1}_raw": pwm[i] for i in range(16)})
 
 
 def autopilot_version(snap, ctx):
-    version = _version_number(_package_version())
-    return M.MAVLink_autopilot_version_message(
-        capabilities=CAPABILITIES, flight_sw_version=version, middleware_sw_version=0, os_sw_version=0,
-        board_version=0, flight_custom_version=[0] * 8, middleware_custom_version=[0] * 8,
-        os_custom_version=[0] * 8, vendor_id=0, product_id=0, uid=ctx.sysid, uid2=[0] * 18)
+    return autopilot_version_message(ctx.sysid)  # rig_emulator.link.telemetry.identity

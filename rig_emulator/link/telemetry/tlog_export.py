@@ -53,6 +53,7 @@ from rig_emulator.link.commands.modes import OFFBOARD, FlightModes
 from rig_emulator.link.telemetry.context import TelemetryContext
 from rig_emulator.physics.rotation import quat_from_euler
 from rig_emulator.simulation.live import RigSnapshot
+from rig_emulator.simulation.run import step_time_us
 
 DEFAULT_HOME = Home(35.7, 51.4, 1200.0)  # the live rig's default (rig_emulator/link/server.py)
 COMPID = M.MAV_COMP_ID_AUTOPILOT1
@@ -74,7 +75,7 @@ ROW_STREAMS = (
 
 def tlog_usec(t_unix_s: float) -> int:
     """The record timestamp mavutil writes: microseconds, the two low bits cleared."""
-    return int(t_unix_s * 1e6) & ~3
+    return int(round(t_unix_s * 1e6)) & ~3
 
 
 class TlogWriter:
@@ -129,15 +130,20 @@ def _t(v) -> tuple:
     return tuple(float(a) for a in np.atleast_1d(v))
 
 
-def row_snapshot(series: dict, i: int, guidance: str) -> RigSnapshot:
-    """The snapshot of log row ``i``: the rig's estimates as it reports them, the truth in ``true_*``."""
+def row_snapshot(series: dict, i: int, guidance: str, physics_rate_hz: float | None = None) -> RigSnapshot:
+    """The snapshot of log row ``i``: the rig's estimates as it reports them, the truth in ``true_*``.
+
+    With ``physics_rate_hz`` its stamp (``time_us``) comes from the step counter of the row
+    (``t`` is k dt: k = round(t x rate)), as the live rig's does."""
     s = series
+    t = float(s["t"][i])
+    time_us = None if physics_rate_hz is None else step_time_us(round(t * physics_rate_hz), physics_rate_hz)
     euler = s["euler"][i]
     nan3 = (math.nan,) * 3
     pos_des = s["pos_des"][i]
     attitude_mode = s["mode"][i] == 1.0 or not np.all(np.isfinite(pos_des))
     return RigSnapshot(
-        time_s=float(s["t"][i]), armed=True, position=_t(s["pos"][i]), velocity=_t(s["vel"][i]),
+        time_s=t, time_us=time_us, armed=True, position=_t(s["pos"][i]), velocity=_t(s["vel"][i]),
         quaternion=_quat_of(euler), euler=_t(euler), euler_rates=_t(s["euler_rate"][i]), body_rates=_t(s["omega"][i]),
         position_target=nan3 if attitude_mode else _t(pos_des),
         velocity_target=nan3 if attitude_mode else _t(s["vel_des"][i]),
@@ -191,7 +197,7 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1, label: str 
     guidance = cfg["guidance.type"]
     next_second = -math.inf
     for k in range(n):
-        snap = row_snapshot(series, k, guidance)
+        snap = row_snapshot(series, k, guidance, cfg["sim.physics_rate_hz"])
         t = snap.time_s
         if k == 0:
             for msg in label_messages(label) + mission_messages(cfg, sysid):

@@ -23,19 +23,26 @@ def clamp_int(value: float, lo: int, hi: int, unknown: int = 0) -> int:
     return int(min(max(round(value), lo), hi))
 
 
-def time_boot_ms(t_s: float) -> int:
-    """Simulated seconds -> uint32 milliseconds since boot (wraps after 49.7 days)."""
-    return int(t_s * 1000.0) % 2**32
+def time_boot_ms(t_us: int) -> int:
+    """Simulated time in whole microseconds (``RigSnapshot.stamp_us``, from the integer step
+    counter) -> uint32 milliseconds since boot (wraps after 49.7 days). Integer division: a
+    float clock's ``int(t * 1000)`` put some stamps 1 ms early (0.021 s * 1000 = 20.999...)."""
+    return (int(t_us) // 1000) % 2**32
 
 
-def time_usec(t_s: float) -> int:
-    """Simulated seconds -> uint64 microseconds since boot."""
-    return int(t_s * 1e6)
+def time_usec(t_us: int) -> int:
+    """Simulated time in whole microseconds -> uint64 microseconds since boot."""
+    return int(t_us)
 
 
-def time_usec_u32(t_s: float) -> int:
-    """Simulated seconds -> uint32 microseconds (SERVO_OUTPUT_RAW), wrapping."""
-    return int(t_s * 1e6) % 2**32
+def time_usec_u32(t_us: int) -> int:
+    """Simulated time in whole microseconds -> uint32 microseconds (SERVO_OUTPUT_RAW), wrapping."""
+    return int(t_us) % 2**32
+
+
+def time_ns(t_us: int) -> int:
+    """Simulated time in whole microseconds -> nanoseconds (TIMESYNC)."""
+    return int(t_us) * 1000
 
 
 def unix_usec(t_unix_s: float) -> int:

@@ -28,7 +28,8 @@ def test_units_saturate_and_never_cast_nan():
     assert U.heading_rad_to_cdeg(-math.pi / 2) == 27000
     assert U.pwm_us(0.0, 15.0) == 1000 and U.pwm_us(15.0, 15.0) == 2000 and U.pwm_us(7.5, 15.0) == 1500
     assert U.pwm_us(99.0, 15.0) == 2000 and U.pwm_us(math.nan, 15.0) == 1000
-    assert U.time_boot_ms(1.2345) == 1234
+    assert U.time_boot_ms(1_234_567) == 1234 and U.time_usec(1_234_567) == 1_234_567
+    assert U.time_boot_ms(2**32 * 1000 + 5000) == 5 and U.time_usec_u32(2**32 + 7) == 7
     assert U.deg_e7(35.7) == 357000000
 
 
