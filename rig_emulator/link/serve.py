@@ -42,9 +42,10 @@ from rig_emulator.physics.hardware import rest_attitude
 from rig_emulator.simulation.live import LiveRig
 
 
-def prepare_rig(cfg) -> LiveRig:
-    """A disarmed rig, compiled, holding its initial position (arming makes it hover there)."""
-    rig = LiveRig(cfg)
+def prepare_rig(cfg, controller=None) -> LiveRig:
+    """A disarmed rig, compiled, holding its initial position (arming makes it hover there);
+    ``controller``: a controller plug-in object flying it instead of the config's ``controller.plugin``."""
+    rig = LiveRig(cfg, controller=controller)
     rig.warm_up()
     rig.set_position_target(list(cfg["initial.position"]))
     return rig
