@@ -3,6 +3,7 @@ ground station (STATUSTEXT, HEARTBEAT) and the rig keeps serving, its own parame
 parameters under its prefix, and it sees the offboard set-point as its reference (issue 16)."""
 
 import math
+import time
 
 import pytest
 
@@ -150,3 +151,21 @@ def test_the_offboard_set_point_is_the_plugins_reference(link):
     assert split_custom_mode(hb.custom_mode)[0] == OFFBOARD
     ref = ctrl.seen[2]  # world ENU: east, north, up
     assert ref == pytest.approx((-0.2, 0.3, 1.5), abs=1e-6), ref
+
+
+def test_rig_emulator_serve_prints_the_failure_and_keeps_serving():
+    """The real command: ``rig-emulator serve --controller ...``; the console has the reason too."""
+    from rig_emulator.testing.rig import RigProcess
+
+    name = "tests.rig_emulator.link.test_link_plugin:Flaky"
+    with RigProcess(speedup=4.0, args=["--controller", name, "--set", "controller.params={fail_after=0.2}"]) as rig:
+        conn = connect(rig.tcp_url)
+        assert command(conn, ARM, 1).result == M.MAV_RESULT_ACCEPTED
+        got = recv_text(conn, lambda t: t.startswith(f"controller {name} at t = "), timeout=30.0)
+        assert got is not None and "RuntimeError: lost my way" in got[1]
+        assert command(conn, M.MAV_CMD_REQUEST_MESSAGE, M.MAVLINK_MSG_ID_AUTOPILOT_VERSION).result == 0
+        conn.close()
+        deadline = time.monotonic() + 10.0
+        while not any("CRITICAL: controller " + name in line for line in rig.output) and time.monotonic() < deadline:
+            time.sleep(0.05)
+    assert any("CRITICAL: controller " + name in line and "lost my way" in line for line in rig.output), rig.output
