@@ -5,6 +5,7 @@ parameters under its prefix, and it sees the offboard set-point as its reference
 import math
 import time
 
+import numpy as np
 import pytest
 
 from protocol.dialect import mavlink as M
@@ -34,7 +35,8 @@ class Flaky(LevelHover):
 
     def update(self, t, obs):
         self.t0 = t if self.t0 is None else self.t0
-        self.seen = (self.params.kp_z, tuple(self.params.w), tuple(obs.reference.position))
+        self.seen = (self.params.kp_z, tuple(self.params.w), tuple(obs.reference.position), obs.attitude_mode,
+                     tuple(obs.reference.attitude), obs.reference.thrust, obs.reference.body_rates)
         mode = int(self.params.fail_mode)
         if mode and t - self.t0 >= self.params.fail_after:
             if mode == 1:
@@ -151,6 +153,26 @@ def test_the_offboard_set_point_is_the_plugins_reference(link):
     assert split_custom_mode(hb.custom_mode)[0] == OFFBOARD
     ref = ctrl.seen[2]  # world ENU: east, north, up
     assert ref == pytest.approx((-0.2, 0.3, 1.5), abs=1e-6), ref
+
+
+def test_an_offboard_attitude_set_point_with_thrust_is_the_plugins_reference(link):
+    rig, conn, ctrl = link
+    conn.mav.param_set_send(1, 1, b"FLK_FAIL_MODE", 0.0, M.MAV_PARAM_TYPE_REAL32)
+    assert command(conn, ARM, 1).result == M.MAV_RESULT_ACCEPTED
+    roll = math.radians(5.0)  # about the front axis, level pitch, heading north
+    q = (math.cos(roll / 2), math.sin(roll / 2), 0.0, 0.0)
+    t_end = None
+    while t_end is None or rig.server.rig.time_s < t_end:
+        conn.mav.set_attitude_target_send(0, 1, 1, M.ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE
+                                          | M.ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE
+                                          | M.ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE, q, 0, 0, 0, 0.6)
+        assert recv(conn, "ATTITUDE", 5.0) is not None
+        if t_end is None:
+            t_end = rig.server.rig.time_s + 0.5
+    _, _, _, attitude_mode, attitude, thrust, body_rates = ctrl.seen
+    assert attitude_mode and not body_rates
+    assert thrust == pytest.approx(rig.server.rig.collective_thrust_from_fraction(float(np.float32(0.6))), rel=1e-12) and thrust > 10.0
+    assert abs(abs(attitude[0]) - roll) < 1e-6, attitude  # the paper's phi; its sign is the rig's convention
 
 
 def test_rig_emulator_serve_prints_the_failure_and_keeps_serving():
