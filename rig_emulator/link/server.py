@@ -78,7 +78,7 @@ class RigServer:
         if signing is not None:
             signing.bind(self)
         # issue 16: a controller plug-in's own parameters are served after the rig's (parameters/plugin_params.py)
-        self.params = ParamService(rig, self, table=ParamTable(rig.controller),
+        self.params = ParamService(rig, self, table=ParamTable(rig.controller, source=rig),
                                    store=state.params if state is not None else None)
         self.console = Console(enabled=console)
         self.flight = FlightControl(self)  # PX4's modes on the rig's guidance, arming checks, flight tasks

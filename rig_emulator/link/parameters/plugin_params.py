@@ -35,17 +35,30 @@ class PluginSpec:
     choices: tuple = ()
 
 
+class Fixed:
+    """A source whose controller never changes (a table built for one controller object)."""
+
+    def __init__(self, controller):
+        self.controller = controller
+
+
 @dataclass(frozen=True)
 class PluginParam:
-    """One served element of a plug-in parameter: ``param`` of ``controller`` (``element`` of a list)."""
+    """One served element of a plug-in parameter: ``param`` (``element`` of a list) of the
+    controller ``source.controller`` flies with now (a :class:`LiveRig` as the source: a
+    REBOOT builds a new controller object from the configuration, the table stays)."""
 
     index: int
     name: str
     param: str
     element: int | None
     spec: PluginSpec
-    controller: object
+    source: object
     key: str = "controller.params"
+
+    @property
+    def controller(self):
+        return self.source.controller
 
     def _slot(self) -> int:
         sl = self.controller.params.index(self.param)
@@ -77,8 +90,9 @@ class PluginParam:
         return self.spec.unit
 
 
-def plugin_params(controller, first_index: int, taken: set[str]) -> list[PluginParam]:
-    """The served parameters of ``controller`` (None: none), indexes from ``first_index``.
+def plugin_params(controller, first_index: int, taken: set[str], source=None) -> list[PluginParam]:
+    """The served parameters of ``controller`` (None: none), indexes from ``first_index``;
+    ``source.controller`` is the controller they act on (default: ``controller`` itself).
 
     Raises :class:`PluginError` when the prefix is malformed, a name is longer than 16
     characters or collides with another parameter."""
@@ -93,6 +107,7 @@ def plugin_params(controller, first_index: int, taken: set[str]) -> list[PluginP
         raise PluginError(name, f"param_prefix = {prefix!r}: must be upper-case letters, digits and '_', "
                                 f"start with a letter and end with '_' (e.g. 'MYC_')")
     cp = controller.params
+    source = source if source is not None else Fixed(controller)
     out: list[PluginParam] = []
     for pname in cp.names():
         sl = cp.index(pname)
@@ -110,5 +125,5 @@ def plugin_params(controller, first_index: int, taken: set[str]) -> list[PluginP
             if full in taken:
                 raise PluginError(name, f"parameter {pname!r} would be served as {full!r}, which is taken")
             taken.add(full)
-            out.append(PluginParam(first_index + len(out), full, pname, e, spec, controller))
+            out.append(PluginParam(first_index + len(out), full, pname, e, spec, source))
     return out

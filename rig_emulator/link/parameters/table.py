@@ -248,13 +248,15 @@ class ParamTable:
     """Lookup by index and by name. With a ``controller`` (a plug-in flying the rig) its own
     parameters follow the rig's (:mod:`rig_emulator.link.parameters.plugin_params`)."""
 
-    def __init__(self, controller=None):
+    def __init__(self, controller=None, source=None):
+        """``source``: what has the controller now (``source.controller``; a LiveRig, whose
+        reboot builds a new controller object); default: ``controller`` itself."""
         self.params = build_table()
         self.by_name = {p.name: p for p in self.params}
         if controller is not None:
             from rig_emulator.link.parameters.plugin_params import plugin_params
 
-            extra = plugin_params(controller, len(self.params), set(self.by_name))
+            extra = plugin_params(controller, len(self.params), set(self.by_name), source)
             self.params = self.params + extra
             self.by_name.update((p.name, p) for p in extra)
         self.controller = controller

@@ -191,3 +191,20 @@ def test_rig_emulator_serve_prints_the_failure_and_keeps_serving():
         while not any("CRITICAL: controller " + name in line for line in rig.output) and time.monotonic() < deadline:
             time.sleep(0.05)
     assert any("CRITICAL: controller " + name in line and "lost my way" in line for line in rig.output), rig.output
+
+
+def test_parameters_act_on_the_plugin_after_a_reboot():
+    """A plug-in loaded by name is built anew by a REBOOT (with its parameters); PARAM_SET acts on the new one."""
+    name = "rig_emulator.controllers.examples.hover:LevelHover"
+    with RigThread(speedup=8.0, overrides={"controller.plugin": name}) as rig:
+        conn = connect(rig.tcp_url)
+        assert param_set(conn, "HOV_KP_Z", 2.5).param_value == 2.5
+        before = rig.server.rig.controller
+        assert command(conn, M.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, 1).result == M.MAV_RESULT_ACCEPTED
+        after = rig.server.rig.controller
+        assert after is not before and after.params.kp_z == 2.5
+        assert param_set(conn, "HOV_KD_Z", 1.5).param_value == 1.5
+        assert after.params.kd_z == 1.5 and after.params.kp_z == 2.5
+        conn.mav.param_request_read_send(1, 1, b"HOV_KP_Z", -1)
+        assert recv(conn, "PARAM_VALUE", 10.0, lambda m: m.param_id == "HOV_KP_Z").param_value == 2.5
+        conn.close()
