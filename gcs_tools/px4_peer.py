@@ -322,6 +322,10 @@ def main(argv=None) -> int:
           f"({log.sim_time_s / max(log.wall_s, 1e-9):.1f}x real time)")
     if alt:
         print(f"altitude over the second half: mean {sum(alt) / len(alt):.3f} m, min {min(alt):.3f}, max {max(alt):.3f}")
+        # tilt: the angle between body z and down, from the true quaternion (cos = 1 - 2 (x^2 + y^2))
+        tilt = [math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (r[2] ** 2 + r[3] ** 2)))))
+                for r in log.truth[len(log.truth) // 2:]]
+        print(f"tilt over the second half: mean {sum(tilt) / len(tilt):.2f} deg, max {max(tilt):.2f} deg")
     return 0
 
 
