@@ -13,7 +13,12 @@ protocol (docs.px4.io "Simulation"; PX4-Autopilot
   (+ SAFETY_ARMED when armed), ``flags`` bit 0 = lockstep.
 
 Its flight code is deliberately simple: a complementary filter (gyro + accelerometer) for
-roll and pitch, the barometer's altitude, PD attitude control and PID altitude control,
+roll and pitch whose accelerometer is aided by the GPS velocity (the accelerometer of a
+flying vehicle measures thrust, not tilt: only the kinematic acceleration the GPS sees,
+taken out of it, leaves gravity; PX4's EKF2 fuses GPS velocity for the same reason), the
+heading from gyro and magnetometer (to put that acceleration in body axes), the barometer's altitude, PX4's attitude structure (a P angle loop giving a
+body-rate set-point, a PI rate loop whose integral, as PX4's ``MC_*RATE_I``, takes up a
+steady torque such as the HILMS rig's centre of gravity off its joint) and PID altitude control,
 and the motor mixing of the HILMS rig's plus frame as the rig documents it (motor 1 front,
 2 right, 3 back, 4 left; 1 and 3 turn counter-clockwise seen from above). It takes off to
 ``altitude_m`` above the starting altitude and holds there.
@@ -54,13 +59,16 @@ class Airframe:
 
 @dataclass
 class Gains:
-    att_kp: float = 16.0  # rad/s^2 per rad
-    att_kd: float = 8.0  # rad/s^2 per rad/s
+    att_p: float = 2.0  # body-rate set-point per angle error (rad/s per rad), PX4's MC_ROLL_P
+    rate_p: float = 8.0  # rad/s^2 per rad/s of rate error, PX4's MC_ROLLRATE_P (as angular acceleration)
+    rate_i: float = 8.0  # rad/s^2 per rad of integrated rate error, PX4's MC_ROLLRATE_I
+    rate_int_limit_nm: float = 0.5  # the most torque the integral may hold (N m), PX4's MC_RR_INT_LIM
     yaw_kd: float = 4.0
     alt_kp: float = 4.0  # m/s^2 per m
     alt_kd: float = 3.5
     alt_ki: float = 0.8
     filter_tau_s: float = 1.0  # complementary filter
+    heading_tau_s: float = 5.0  # gyro + magnetometer heading
     climb_tau_s: float = 0.05  # low-pass of the barometric climb rate
     max_vertical_acc: float = 1.5  # m/s^2 (the rig's thrust-to-weight is 1.28)
     integrate_within_m: float = 0.2  # altitude error below which the integral acts
@@ -73,27 +81,70 @@ class HoverController:
         self.frame = frame or Airframe()
         self.gains = gains or Gains()
         self.altitude_m = altitude_m
-        self.roll = self.pitch = 0.0
+        self.roll = self.pitch = self.yaw = 0.0
+        self.acc_ned = (0.0, 0.0, 0.0)  # kinematic acceleration from the GPS velocity (m/s^2, NED)
+        self._gps_prev = None  # (t, vn, ve, vd)
         self.alt0 = None
         self.alt = self.climb = 0.0
         self.integral = 0.0
+        self.rate_integral = [0.0, 0.0]  # roll, pitch (rad); reset on arming, as PX4 does
         self.t_prev = None
+
+    def arm(self) -> None:
+        """Forget the integrators (PX4 resets them while landed/disarmed)."""
+        self.integral = 0.0
+        self.rate_integral = [0.0, 0.0]
+
+    def gps(self, msg) -> None:
+        """One HIL_GPS (sent after the HIL_SENSOR of the same step): the kinematic acceleration
+        from the change of its velocity since the previous one."""
+        if self.t_prev is None:
+            return
+        v = (msg.vn * 0.01, msg.ve * 0.01, msg.vd * 0.01)
+        if self._gps_prev is not None and self.t_prev > self._gps_prev[0]:
+            dt = self.t_prev - self._gps_prev[0]
+            self.acc_ned = tuple((v[i] - self._gps_prev[1 + i]) / dt for i in range(3))
+        self._gps_prev = (self.t_prev, *v)
+
+    def _body_from_ned(self, a):
+        """NED vector ``a`` in body axes (FRD) at the estimated roll, pitch, heading (ZYX)."""
+        cr, sr = math.cos(self.roll), math.sin(self.roll)
+        cp, sp = math.cos(self.pitch), math.sin(self.pitch)
+        cy, sy = math.cos(self.yaw), math.sin(self.yaw)
+        x1, y1 = cy * a[0] + sy * a[1], -sy * a[0] + cy * a[1]  # heading
+        x2, z2 = cp * x1 - sp * a[2], sp * x1 + cp * a[2]  # pitch
+        return x2, cr * y1 + sr * z2, -sr * y1 + cr * z2  # roll
+
+    def _mag_heading(self, s) -> float:
+        """Tilt-compensated magnetic heading (rad); the declination is not known here (as a bare compass)."""
+        cr, sr = math.cos(self.roll), math.sin(self.roll)
+        cp, sp = math.cos(self.pitch), math.sin(self.pitch)
+        xh = s.xmag * cp + (s.ymag * sr + s.zmag * cr) * sp
+        yh = s.ymag * cr - s.zmag * sr
+        return math.atan2(-yh, xh)
 
     def estimate(self, t: float, s) -> float:
         """Update the estimates from one HIL_SENSOR; returns the step (s)."""
         dt = 0.0 if self.t_prev is None else t - self.t_prev
         self.t_prev = t
-        roll_acc = math.atan2(-s.yacc, -s.zacc)
-        pitch_acc = math.atan2(s.xacc, math.hypot(s.yacc, s.zacc))
+        ab = self._body_from_ned(self.acc_ned)
+        fx, fy, fz = s.xacc - ab[0], s.yacc - ab[1], s.zacc - ab[2]  # what gravity alone gives
+        roll_acc = math.atan2(-fy, -fz)
+        pitch_acc = math.atan2(fx, math.hypot(fy, fz))
         if self.alt0 is None:
             self.roll, self.pitch, self.alt0, self.alt = roll_acc, pitch_acc, s.pressure_alt, 0.0
+            self.yaw = self._mag_heading(s)
             return dt
         a = dt / self.gains.filter_tau_s
-        cr, sr, tp = math.cos(self.roll), math.sin(self.roll), math.tan(self.pitch)
+        cr, sr, cp, tp = math.cos(self.roll), math.sin(self.roll), math.cos(self.pitch), math.tan(self.pitch)
         roll_dot = s.xgyro + (s.ygyro * sr + s.zgyro * cr) * tp
         pitch_dot = s.ygyro * cr - s.zgyro * sr
+        yaw_dot = (s.ygyro * sr + s.zgyro * cr) / max(cp, 0.1)
         self.roll = (1.0 - a) * (self.roll + roll_dot * dt) + a * roll_acc
         self.pitch = (1.0 - a) * (self.pitch + pitch_dot * dt) + a * pitch_acc
+        self.yaw += yaw_dot * dt
+        err = (self._mag_heading(s) - self.yaw + math.pi) % (2.0 * math.pi) - math.pi
+        self.yaw += dt / self.gains.heading_tau_s * err
         alt = s.pressure_alt - self.alt0
         if dt > 0.0:
             b = dt / (self.gains.climb_tau_s + dt)
@@ -111,8 +162,14 @@ class HoverController:
         acc = min(max(acc, -g.max_vertical_acc), g.max_vertical_acc)  # keep motor headroom for attitude
         tilt = max(math.cos(self.roll) * math.cos(self.pitch), 0.5)
         thrust = f.mass_kg * (f.gravity + acc) / tilt
-        tx = f.inertia[0] * (-g.att_kp * self.roll - g.att_kd * s.xgyro)
-        ty = f.inertia[1] * (-g.att_kp * self.pitch - g.att_kd * s.ygyro)
+        torque = []
+        for axis, (angle, gyro) in enumerate(((self.roll, s.xgyro), (self.pitch, s.ygyro))):
+            rate_err = -g.att_p * angle - gyro  # level: angle set-point 0
+            j = f.inertia[axis]
+            lim = g.rate_int_limit_nm / (j * g.rate_i)
+            self.rate_integral[axis] = min(max(self.rate_integral[axis] + rate_err * dt, -lim), lim)
+            torque.append(j * (g.rate_p * rate_err + g.rate_i * self.rate_integral[axis]))
+        tx, ty = torque
         tz = f.inertia[2] * (-g.yaw_kd * s.zgyro)
         # plus frame, body FRD: roll = l (F4 - F2), pitch = l (F1 - F3), yaw = km (F1 - F2 + F3 - F4)
         c, l = thrust / 4.0, f.arm_m
@@ -207,6 +264,7 @@ def fly(link: StreamLink, duration_s: float, controller: HoverController | None 
         mavlink.MAVLINK_MSG_ID_HIL_STATE_QUATERNION, HIL_STATE_QUATERNION_INTERVAL_US, 0, 0, 0, 0, 0))
     link.send(mavlink.MAVLink_heartbeat_message(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4, 0, 0, 0, 3))
     t0 = None
+    was_armed = False
     wall0 = time.perf_counter()
     flags = FLAG_LOCKSTEP if lockstep else 0
     for msg in link.messages():
@@ -217,6 +275,7 @@ def fly(link: StreamLink, duration_s: float, controller: HoverController | None 
             continue
         if kind == "HIL_GPS":
             log.gps += 1
+            controller.gps(msg)
             continue
         if kind != "HIL_SENSOR" or msg.id != 0:
             continue
@@ -231,6 +290,9 @@ def fly(link: StreamLink, duration_s: float, controller: HoverController | None 
         log.steps += 1
         dt = controller.estimate(t, msg)
         armed = t - t0 >= arm_at_s
+        if armed and not was_armed:
+            controller.arm()
+        was_armed = armed
         controls = controller.motors(dt, msg) if armed else [0.0] * 4
         link.send(mavlink.MAVLink_hil_actuator_controls_message(
             msg.time_usec, controls + [0.0] * 12, MODE_CUSTOM | (MODE_ARMED if armed else 0), flags))
@@ -260,6 +322,10 @@ def main(argv=None) -> int:
           f"({log.sim_time_s / max(log.wall_s, 1e-9):.1f}x real time)")
     if alt:
         print(f"altitude over the second half: mean {sum(alt) / len(alt):.3f} m, min {min(alt):.3f}, max {max(alt):.3f}")
+        # tilt: the angle between body z and down, from the true quaternion (cos = 1 - 2 (x^2 + y^2))
+        tilt = [math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (r[2] ** 2 + r[3] ** 2)))))
+                for r in log.truth[len(log.truth) // 2:]]
+        print(f"tilt over the second half: mean {sum(tilt) / len(tilt):.2f} deg, max {max(tilt):.2f} deg")
     return 0
 
 

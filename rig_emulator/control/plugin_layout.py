@@ -9,7 +9,10 @@ body FRD, paper Euler angles; Sec. 4-1 and Eq. 1):
 
 * ``O_T`` time (s), ``O_DT`` the plug-in's period (s), ``O_RESET`` 1.0 on the first call
   after arming (the controller must forget its state), ``O_MODE`` the guidance mode
-  (0 position references, 1 attitude references);
+  (0 position references, 1 attitude references, 2 body-rate references: an offboard
+  body-rate set-point, ``O_REF`` + ``REF_ATT_RATE`` then holds body rates FRD);
+* ``O_REF_THRUST``: the collective thrust (N) of an offboard attitude or body-rate set-point
+  (NaN: none given, hover thrust m g meant; NaN in position mode);
 * ``O_EULER`` (3) attitude, ``O_EULER_RATE`` (3) Euler rates, ``O_BODY_RATE`` (3) body
   rates: the complementary filter's estimate (or the truth with ``sensors.feedback = "ideal"``);
 * ``O_POS``, ``O_VEL`` (3 each): the onboard virtual translation of Eq. 1 (or the truth);
@@ -81,6 +84,7 @@ O_V_MAX = 153
 O_F_MAX = 154
 O_MAX_TILT = 155
 O_REF_OMEGA = 156
+O_REF_THRUST = 157  # the offboard collective thrust set-point u1 (N) in attitude/rate modes; NaN: hover (m g) or none
 OBS_SIZE = 160
 
 # out

@@ -74,8 +74,10 @@ class ControllerParams:
     served rig changes the array in place when a ground station sets ``<prefix><NAME><i>``.
     """
 
-    def __init__(self, defaults: dict, values: dict | None = None, owner: str = "controller"):
+    def __init__(self, defaults: dict, values: dict | None = None, owner: str = "controller",
+                 info: dict | None = None):
         self._slices: dict[str, slice] = {}
+        self.info = info or {}  # name -> {"min", "max", "unit", "doc"} (Controller.param_info)
         flat: list[float] = []
         for name, default in defaults.items():
             if not name.isidentifier():
@@ -106,7 +108,15 @@ class ControllerParams:
             raise PluginError(self.owner, f"parameter {name!r}: expected {sl.stop - sl.start} value(s), got {v.size}")
         if not np.all(np.isfinite(v)):
             raise PluginError(self.owner, f"parameter {name!r}: values must be finite, got {value!r}")
+        lo, hi = self.limits(name)
+        if np.any(v < lo) or np.any(v > hi):
+            raise PluginError(self.owner, f"parameter {name!r}: {value!r} is outside [{lo:g}, {hi:g}]")
         self.array[sl] = v
+
+    def limits(self, name: str) -> tuple[float, float]:
+        """(min, max) of parameter ``name`` from the controller's ``param_info`` (+-inf when not given)."""
+        info = self.info.get(name, {})
+        return float(info.get("min", -math.inf)), float(info.get("max", math.inf))
 
     def __getattr__(self, name):
         slices = self.__dict__.get("_slices", {})
@@ -145,7 +155,11 @@ class Controller:
     * ``params``: the defaults of its own parameters (name -> number or list of numbers);
       set from the config (``[controller.params]``) or, served, as MAVLink parameters
       ``<param_prefix><NAME><i>``;
-    * ``param_prefix``: that prefix (upper case, ends with ``_``; empty: not served).
+    * ``param_prefix``: that prefix (upper case, ends with ``_``; empty: not served);
+      a vector parameter is served one element a name, numbered from 1 (``MYC_KD1``..``MYC_KD3``);
+    * ``param_info`` (optional): per parameter ``{"min": .., "max": .., "unit": "..", "doc": ".."}``:
+      every change (config, :meth:`LiveRig.set_params`, PARAM_SET) outside [min, max] is
+      refused with a message; unit and doc go to the ground station's parameter metadata.
 
     :meth:`reset` runs on arming, before the first :meth:`update`. Keep state on ``self``.
     """
@@ -156,9 +170,11 @@ class Controller:
     raw_sensors = False
     params: dict = {}
     param_prefix = ""
+    param_info: dict = {}
 
     def __init__(self, **params):
-        self.params = ControllerParams(type(self).params, params, owner=type(self).__qualname__)
+        self.params = ControllerParams(type(self).params, params, owner=type(self).__qualname__,
+                                       info=type(self).param_info)
 
     def reset(self) -> None:
         """Forget everything learnt in a previous flight (called on arming)."""

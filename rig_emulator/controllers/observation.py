@@ -40,6 +40,18 @@ class Reference:
         """Desired yaw psi (rad), position mode."""
         return float(self._a[self._yaw])
 
+    @property
+    def thrust(self) -> float:
+        """Collective thrust u1 (N) of an offboard attitude or body-rate set-point; NaN when none
+        was given (hover thrust m g meant) and in position mode."""
+        return float(self._a[PL.O_REF_THRUST])
+
+    @property
+    def body_rates(self) -> bool:
+        """True for an offboard body-rate set-point: ``attitude_rate`` then holds body rates
+        (FRD, rad/s) and ``attitude`` is not controlled."""
+        return self._a[PL.O_MODE] == 2.0
+
 
 class Observation:
     """The onboard computer's view at a control instant (see the module docstring).

@@ -51,6 +51,7 @@ from rig_emulator.link.mission.transfer import MissionTransfer
 from rig_emulator.link.commands.modes import FlightModes
 from rig_emulator.link.commands.offboard_setpoints import OffboardSetpoints
 from rig_emulator.link.parameters.service import ParamService
+from rig_emulator.link.parameters.table import ParamTable
 from rig_emulator.link.signing.policy import refuse_setup_signing
 from rig_emulator.link.telemetry.stream_table import ON_REQUEST, STREAMS, default_rates, group_members
 from rig_emulator.link.telemetry.streams import StreamSchedule
@@ -83,7 +84,9 @@ class RigServer:
         self.signing = signing
         if signing is not None:
             signing.bind(self)
-        self.params = ParamService(rig, self, store=state.params if state is not None else None)
+        # issue 16: a controller plug-in's own parameters are served after the rig's (parameters/plugin_params.py)
+        self.params = ParamService(rig, self, table=ParamTable(rig.controller, source=rig),
+                                   store=state.params if state is not None else None)
         self.console = Console(enabled=console)
         self.flight = FlightControl(self)  # PX4's modes on the rig's guidance, arming checks, flight tasks
         self.ctx.flight = self.flight
@@ -97,7 +100,7 @@ class RigServer:
         self.offboard_loss = OffboardLossMonitor(self, self.offboard)
         self.fence = FenceMonitor(self)
         self.ctx.fence = self.fence
-        self.ftp = FtpServer(FileStore(metadata_files()))
+        self.ftp = FtpServer(FileStore(metadata_files(rig.controller)))  # issue 16: with the plug-in's parameters
         self.endpoints = []
         try:
             for spec in endpoints:  # connection strings, or endpoints opened already (a BootLink's)

@@ -407,7 +407,8 @@ class LiveRig:
         if plugin.controller is not None and "controller.params" in changes:
             from rig_emulator.controllers import ControllerParams
 
-            check = ControllerParams(type(plugin.controller).params, new_cfg["controller.params"], owner=plugin.name)
+            check = ControllerParams(type(plugin.controller).params, new_cfg["controller.params"], owner=plugin.name,
+                                     info=plugin.controller.params.info)
         else:
             check = None  # (a PluginError above changed nothing)
         self.sim.cfg, self.sim.pp, self.sim.cp, self.sim.gp, self.sim.dist = new_cfg, pp, cp, gp, dist

@@ -282,7 +282,7 @@ class RigThread(_RigBase):
     """A :class:`RigServer` running in a daemon thread of this process."""
 
     def __init__(self, speedup: float = 1.0, extra_endpoints=(), overrides=None, scenario=None, sysid: int = 1,
-                 signing_key: bytes | None = None, state_dir=None, airframe: str = TEST_AIRFRAME):
+                 signing_key: bytes | None = None, state_dir=None, airframe: str = TEST_AIRFRAME, controller=None):
         from rig_emulator.config.loader import load_config
         from rig_emulator.link.state.rig_state import RigState
         from rig_emulator.link.serve import prepare_rig
@@ -290,7 +290,7 @@ class RigThread(_RigBase):
         from rig_emulator.link.signing.policy import LinkSigning
 
         cfg = load_config(airframe=airframe, scenario=scenario, overrides=overrides or {})
-        rig = prepare_rig(cfg)
+        rig = prepare_rig(cfg, controller)  # controller: a plug-in object (issue 16)
         self.state = None if state_dir is None else RigState(state_dir, None)
         signing = None
         if signing_key is not None:

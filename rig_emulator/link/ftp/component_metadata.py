@@ -89,18 +89,37 @@ def _entry(p, defaults) -> dict:
     return entry
 
 
-@functools.lru_cache(maxsize=1)
-def parameter_metadata() -> bytes:
-    """``parameters.json`` (COMP_METADATA_TYPE_PARAMETER, version 3) for the whole table."""
+def _plugin_entry(p) -> dict:
+    """A controller plug-in's parameter (:mod:`rig_emulator.link.parameters.plugin_params`)."""
+    plugin = getattr(p.controller, "plugin_name", type(p.controller).__qualname__)
+    what = p.param if p.element is None else f"{p.param}[{p.element}]"
+    entry = {"name": p.name, "type": "Float", "shortDesc": p.spec.doc.split(";")[0][:120],
+             "longDesc": f"{p.spec.doc} (parameter {what} of the controller plug-in {plugin})",
+             "group": "controller plug-in", "default": _number(p.default())}
+    if p.spec.unit:
+        entry["units"] = p.spec.unit
+    if math.isfinite(p.spec.lo):
+        entry["min"] = _number(p.spec.lo)
+    if math.isfinite(p.spec.hi):
+        entry["max"] = _number(p.spec.hi)
+    return entry
+
+
+@functools.lru_cache(maxsize=4)
+def parameter_metadata(controller=None) -> bytes:
+    """``parameters.json`` (COMP_METADATA_TYPE_PARAMETER, version 3) for the whole table
+    (with ``controller``: also the plug-in's own parameters, with its class defaults)."""
     defaults = load_config()
-    doc = {"version": 3, "parameters": [_entry(p, defaults) for p in ParamTable().params]}
+    entries = [_plugin_entry(p) if hasattr(p, "controller") else _entry(p, defaults)
+               for p in ParamTable(controller).params]
+    doc = {"version": 3, "parameters": entries}
     return json.dumps(doc, indent=1, sort_keys=False).encode("utf-8")
 
 
-@functools.lru_cache(maxsize=1)
-def general_metadata() -> bytes:
+@functools.lru_cache(maxsize=4)
+def general_metadata(controller=None) -> bytes:
     """``general.json`` (COMP_METADATA_TYPE_GENERAL) pointing at the parameter metadata."""
-    params = parameter_metadata()
+    params = parameter_metadata(controller)
     doc = {
         "version": 1,
         "vendorName": "hilms-sil",
@@ -113,22 +132,26 @@ def general_metadata() -> bytes:
     return json.dumps(doc, indent=1).encode("utf-8")
 
 
-def metadata_files() -> dict[str, bytes]:
-    """Every file the rig serves over MAVFTP, by path."""
-    return {GENERAL_PATH: general_metadata(), PARAMETERS_PATH: parameter_metadata()}
+def metadata_files(controller=None) -> dict[str, bytes]:
+    """Every file the rig serves over MAVFTP, by path (``controller``: the plug-in flying it)."""
+    return {GENERAL_PATH: general_metadata(controller), PARAMETERS_PATH: parameter_metadata(controller)}
+
+
+def _controller(ctx):
+    return getattr(getattr(ctx, "rig", None), "controller", None)
 
 
 # --- the messages that say where the files are (MAV_CMD_REQUEST_MESSAGE) ---------------------------------
 def component_metadata_message(snap, ctx):
     """COMPONENT_METADATA: URI and CRC32 of the general metadata file."""
     return M.MAVLink_component_metadata_message(time_boot_ms=U.time_boot_ms(snap.stamp_us),
-                                                file_crc=crc32(general_metadata()),
+                                                file_crc=crc32(general_metadata(_controller(ctx))),
                                                 uri=mftp_uri(GENERAL_PATH).encode("ascii"))
 
 
 def component_information_message(snap, ctx):
     """COMPONENT_INFORMATION (deprecated form, for older ground stations): the same file, no peripherals."""
     return M.MAVLink_component_information_message(
-        time_boot_ms=U.time_boot_ms(snap.stamp_us), general_metadata_file_crc=crc32(general_metadata()),
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), general_metadata_file_crc=crc32(general_metadata(_controller(ctx))),
         general_metadata_uri=mftp_uri(GENERAL_PATH).encode("ascii"), peripherals_metadata_file_crc=0,
         peripherals_metadata_uri=b"")

@@ -8,12 +8,16 @@
   plus a STATUSTEXT saying why. With a ``store`` (:mod:`rig_emulator.link.parameters.store`)
   an accepted change is stored before it is echoed; one that cannot be stored is undone
   and answered like a rejected one.
+* A controller plug-in's own parameters (:mod:`.plugin_params`) are in the table after the
+  rig's when the server's table was built with the plug-in; they are validated by the
+  plug-in's rules and stored under its name.
 """
 
 from __future__ import annotations
 
 from protocol.dialect import mavlink
 from rig_emulator.config.loader import ConfigError
+from rig_emulator.controllers.base import PluginError
 from rig_emulator.link.parameters.table import Param, ParamTable, as_float32
 from rig_emulator.link.state.directory import StateWriteError
 
@@ -53,12 +57,13 @@ class ParamService:
         try:
             self.rig.set_param(p.key, p.to_config(float(msg.param_value), self.rig.cfg))
             if self.store is not None:
+                plugin = getattr(p.controller, "plugin_name", None) if hasattr(p, "controller") else None
                 try:
-                    self.store.save(p.name, float(msg.param_value))
+                    self.store.save(p.name, float(msg.param_value), plugin=plugin)
                 except StateWriteError:
                     self.rig.set_param(p.key, old)
                     raise
-        except (ConfigError, ValueError) as exc:
+        except (ConfigError, ValueError, PluginError) as exc:
             self.rejected += 1
             self.out.reply(channel, self.value_message(p))
             self.out.statustext(channel, mavlink.MAV_SEVERITY_ERROR, f"{p.name} rejected: {exc}")

@@ -3,7 +3,12 @@
 The document holds every parameter a PARAM_SET changed (by its MAVLink name, with the
 REAL32 value the ground station sent), not the whole table::
 
-    {"format": "hilms-sil parameters", "version": 1, "params": {"SMC_K_PHI": 2.5, "WP_RADIUS": 0.1}}
+    {"format": "hilms-sil parameters", "version": 1, "params": {"SMC_K_PHI": 2.5, "WP_RADIUS": 0.1},
+     "plugins": {"my_pkg.mod:MyController": {"MYC_KP": 3.0}}}
+
+A controller plug-in's parameters are kept under ``plugins`` by the plug-in's name (optional
+key): they are applied when that plug-in flies the rig again, and a rig started with
+another plug-in (or none) leaves them stored but unused.
 
 It is rewritten (atomically, see :mod:`rig_emulator.link.state.directory`) on each accepted PARAM_SET *before* the
 rig answers with PARAM_VALUE, so an acknowledged value is on disk; when it cannot be
@@ -17,6 +22,7 @@ from __future__ import annotations
 import math
 
 from rig_emulator.config.loader import ConfigError
+from rig_emulator.controllers.base import PluginError
 from rig_emulator.link.parameters.table import ParamTable
 from rig_emulator.link.state.directory import StateDir
 
@@ -43,12 +49,29 @@ def parse_params(doc: dict, state: StateDir, table: ParamTable) -> dict[str, flo
     return out
 
 
+def parse_plugins(doc: dict, state: StateDir) -> dict[str, dict[str, float]]:
+    """plug-in name -> (parameter name -> value) of a params document (optional ``plugins``)."""
+    plugins = doc.get("plugins", {})
+    if not isinstance(plugins, dict):
+        raise state.error(FILE, "plugins", "expected an object of PLUGIN: {NAME: value}")
+    out = {}
+    for plugin, params in plugins.items():
+        if not isinstance(params, dict):
+            raise state.error(FILE, f"plugins.{plugin}", "expected an object of NAME: value")
+        for name, value in params.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise state.error(FILE, f"plugins.{plugin}.{name}", f"expected a finite number, got {value!r}"[:120])
+        out[plugin] = {name: float(v) for name, v in params.items()}
+    return out
+
+
 class ParamStore:
     def __init__(self, state: StateDir, table: ParamTable | None = None):
         self.state = state
         self.table = table or ParamTable()
         doc = state.read_json(FILE, FORMAT, VERSION)
         self.values: dict[str, float] = {} if doc is None else parse_params(doc, state, self.table)
+        self.plugins: dict[str, dict[str, float]] = {} if doc is None else parse_plugins(doc, state)
 
     def apply(self, rig) -> list[str]:
         """Set the stored values on ``rig`` (in table order); returns the names applied.
@@ -64,17 +87,36 @@ class ParamStore:
             except (ConfigError, ValueError) as exc:
                 raise self.state.error(FILE, f"params.{p.name}", str(exc)) from None
             applied.append(p.name)
+        controller = getattr(rig, "controller", None)
+        stored = self.plugins.get(getattr(controller, "plugin_name", None), {}) if controller is not None else {}
+        if stored:
+            table = ParamTable(controller)
+            for name, value in stored.items():
+                p = table.by_name.get(name)
+                if p is None or not hasattr(p, "controller"):
+                    raise self.state.error(FILE, f"plugins.{controller.plugin_name}.{name}",
+                                           "the plug-in has no such parameter (any more)")
+                try:
+                    rig.set_param(p.key, p.to_config(value, rig.cfg))
+                except (ConfigError, ValueError, PluginError) as exc:
+                    raise self.state.error(FILE, f"plugins.{controller.plugin_name}.{name}", str(exc)) from None
+                applied.append(name)
         return applied
 
-    def save(self, name: str, value: float) -> None:
-        """Store ``name = value`` with everything stored before; StateWriteError leaves both as they were."""
-        previous = self.values.get(name)
-        self.values[name] = float(value)
+    def save(self, name: str, value: float, plugin: str | None = None) -> None:
+        """Store ``name = value`` (a parameter of controller plug-in ``plugin`` when given) with
+        everything stored before; StateWriteError leaves both as they were."""
+        values = self.values if plugin is None else self.plugins.setdefault(plugin, {})
+        previous = values.get(name)
+        values[name] = float(value)
+        doc = {"format": FORMAT, "version": VERSION, "params": dict(self.values)}
+        if any(self.plugins.values()):
+            doc["plugins"] = {k: dict(v) for k, v in self.plugins.items() if v}
         try:
-            self.state.write_json(FILE, {"format": FORMAT, "version": VERSION, "params": dict(self.values)})
+            self.state.write_json(FILE, doc)
         except Exception:
             if previous is None:
-                del self.values[name]
+                del values[name]
             else:
-                self.values[name] = previous
+                values[name] = previous
             raise

@@ -246,11 +246,21 @@ def build_table() -> list[Param]:
 
 
 class ParamTable:
-    """Lookup by index and by name."""
+    """Lookup by index and by name. With a ``controller`` (a plug-in flying the rig) its own
+    parameters follow the rig's (:mod:`rig_emulator.link.parameters.plugin_params`)."""
 
-    def __init__(self):
+    def __init__(self, controller=None, source=None):
+        """``source``: what has the controller now (``source.controller``; a LiveRig, whose
+        reboot builds a new controller object); default: ``controller`` itself."""
         self.params = build_table()
         self.by_name = {p.name: p for p in self.params}
+        if controller is not None:
+            from rig_emulator.link.parameters.plugin_params import plugin_params
+
+            extra = plugin_params(controller, len(self.params), set(self.by_name), source)
+            self.params = self.params + extra
+            self.by_name.update((p.name, p) for p in extra)
+        self.controller = controller
 
     def __len__(self) -> int:
         return len(self.params)
@@ -268,6 +278,8 @@ def describe(table: ParamTable | None = None) -> str:
     lines = []
     for p in table.params:
         key = p.key if p.element is None else f"{p.key}[{p.element}]"
+        if hasattr(p, "param"):  # a plug-in's parameter
+            key = f"{p.key}.{p.param}" + ("" if p.element is None else f"[{p.element}]")
         lines.append(f"{p.index:3d} {p.name:16s} {key} [{p.unit}]" if p.unit else f"{p.index:3d} {p.name:16s} {key}")
     return "\n".join(lines)
 

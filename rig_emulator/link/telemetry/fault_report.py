@@ -12,6 +12,10 @@ from the config's timed events or a command) and a
 * the fused attitude estimate becomes invalid / valid: CRITICAL / INFO;
 * the loss-of-control failsafe trips: CRITICAL ``"loss of control: attitude error 97 deg >
   45 deg for 0.5 s; motors stopped, disarmed"``; it clears when the rig is armed again.
+* a controller plug-in fails while flying (issue 16; :attr:`LiveRig.plugin_failure`):
+  CRITICAL ``"controller my_pkg.mod:MyController at t = 3.000 s: RuntimeError: ... (mod.py:41
+  in update); motors stopped, disarmed; arm again to retry"``, and INFO when arming
+  clears it.
 
 Detections are debounced by the supervisor (``health.reject_window``, with hysteresis), so a
 module rejected now and then is not reported and a faulty one is reported once; a flagged
@@ -77,6 +81,7 @@ class FaultReporter:
         self.seen_events = 0
         self.prev: FaultStatus | None = None
         self._signature = None
+        self._plugin_failure = None
 
     def poll(self, rig) -> tuple[list[tuple[int, str]], bool]:
         """(STATUSTEXT (severity, text) pairs to broadcast, whether the failsafe state changed)."""
@@ -123,4 +128,17 @@ class FaultReporter:
             out.append((M.MAV_SEVERITY_CRITICAL, failsafe_text(f, rig.cfg)))
         elif changed:
             out.append((M.MAV_SEVERITY_INFO, "failsafe cleared (armed again)"))
+        failure = getattr(rig, "plugin_failure", None)
+        if failure is not self._plugin_failure:
+            if failure is not None:
+                out.append((M.MAV_SEVERITY_CRITICAL, plugin_failure_text(failure)))
+            else:
+                out.append((M.MAV_SEVERITY_INFO, f"controller {self._plugin_failure.plugin}: armed again, reset()"))
+            self._plugin_failure = failure
+            changed = True
         return out, changed
+
+
+def plugin_failure_text(failure) -> str:
+    """Why a controller plug-in stopped flying (a PluginError: plug-in, time, problem) and what the rig did."""
+    return f"{failure}; motors stopped, disarmed; arm again to retry"

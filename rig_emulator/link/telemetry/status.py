@@ -26,7 +26,8 @@ snapshot's plain-data :class:`~rig_emulator.simulation.faults.FaultStatus`:
 * the control bits: unhealthy once the loss-of-control failsafe has tripped;
 * PREARM_CHECK: unhealthy while any of the above is.
 
-HEARTBEAT.system_status: EMERGENCY once the failsafe has tripped (until armed again),
+HEARTBEAT.system_status: EMERGENCY once the failsafe has tripped or a controller plug-in
+failed (until armed again),
 CRITICAL while armed with the attitude estimate invalid or the attitude error or body rate
 beyond its failsafe limit (before the hold time has passed), else ACTIVE (armed) / STANDBY.
 """
@@ -68,9 +69,12 @@ def heartbeat(snap, ctx):
     base = M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | M.MAV_MODE_FLAG_STABILIZE_ENABLED
     if snap.armed:
         base |= M.MAV_MODE_FLAG_SAFETY_ARMED
+    status = system_status(snap)
+    if getattr(ctx.rig, "plugin_failure", None) is not None:  # a controller plug-in failed (issue 16): as the failsafe
+        status = M.MAV_STATE_EMERGENCY
     return M.MAVLink_heartbeat_message(
         type=M.MAV_TYPE_QUADROTOR, autopilot=M.MAV_AUTOPILOT_PX4, base_mode=base,
-        custom_mode=ctx.modes.custom_mode, system_status=system_status(snap), mavlink_version=3)
+        custom_mode=ctx.modes.custom_mode, system_status=status, mavlink_version=3)
 
 
 def sensor_health_bits(snap, ctx) -> int:

@@ -31,8 +31,8 @@ FREE_RUN_SPEEDUP = 0.01
 class Px4Rig:
     """A served rig in px4-simulator mode in a thread of the test process."""
 
-    def __init__(self, spec: str = "127.0.0.1:0", ground: bool = False):
-        cfg = load_config(airframe="hilms-ideal", scenario="hover")  # the stand-in flies the ideal plant's numbers
+    def __init__(self, spec: str = "127.0.0.1:0", ground: bool = False, airframe: str = "hilms-ideal"):
+        cfg = load_config(airframe=airframe, scenario="hover")
         self.rig = prepare_rig(cfg)
         self.ground = RigServer(self.rig, ["tcpin:127.0.0.1:0"] if ground else [], home=HOME, speedup=0.0)
         self.transport = open_transport(spec)
@@ -105,6 +105,21 @@ def test_hover_in_lockstep_and_two_sessions_identical():
         # the peer's last answer stepped the plant once more before it hung up
         assert rig.server.session_steps == [a.steps + 1, b.steps + 1]
         assert any("flight stack gone" in line for line in rig.lines)
+
+
+def test_the_stand_in_holds_hover_on_the_hardware_rig():
+    """The default plant (``hilms``) hangs at about 13 deg roll and pitch when disarmed (its centre of
+    gravity off the joint) and needs a steady torque to stay level; its accelerometer, like a
+    flying vehicle's, shows thrust rather than tilt. The stand-in's GPS-aided tilt estimate and
+    rate integral (as PX4's EKF2 and rate controller) level it and hold 1 m."""
+    with Px4Rig(airframe="hilms") as rig:
+        link = StreamLink.tcp("127.0.0.1", rig.port)
+        log = fly(link, 12.0, HoverController(altitude_m=1.0))
+        link.close()
+    assert max(_tilt_deg(row) for row in log.truth if 0.4e6 <= row[0] <= 0.5e6) > 10.0  # hanging when armed
+    assert all(_tilt_deg(row) < 4.0 for row in log.truth if row[0] >= 4.0e6)
+    held = [(t, h) for t, h in _altitudes(log) if t >= 6.0]
+    assert held and all(abs(h - 1.0) < 0.15 for _, h in held), held[:: max(1, len(held) // 10)]
 
 
 def test_dropped_connection_ends_the_session_and_the_rig_waits():
