@@ -3,9 +3,21 @@
 Scenario ``hover-shocks`` (shocks of 1 N m for 50 ms at 3, 7, 11 and 15 s on arms 1-4),
 logged at the control rate (500 Hz) so the motor-command chattering is seen. Per shock
 (:func:`~gcs_tools.reproduce.metrics.shock_response`, attitude error = what the controller
-sees minus the reference): the axis it disturbed, the peak deviation, the settling time into
-a band of 10 % of the peak (at least 0.1 deg) before the next shock, the overshoot past
-zero. Chattering: RMS of the motor voltage commands above 5 Hz (:func:`~gcs_tools.reproduce.metrics.hf_rms`).
+sees minus the reference): the axis it disturbed, the peak deviation, the overshoot past
+zero, and the settling time. Chattering: RMS of the motor voltage commands above 5 Hz
+(:func:`~gcs_tools.reproduce.metrics.hf_rms`).
+
+Settling (:func:`~gcs_tools.reproduce.metrics.settling_about_final`) is the textbook one: the
+time after which the response stays within 10 % of its deviation (at least 0.1 deg) about its
+*final* value (the mean of the last second before the next shock; the last 0.2 s before it, where
+the zero-phase filter already sees the next shock, left out), taken on the error below
+the chattering cut-off (:func:`~gcs_tools.reproduce.metrics.low_part`, the complement of what
+the chattering figure measures). The paper says the SMC both chatters and settles faster
+(Fig. 12), so its settling is that of the response, not of the chattering; and an FLC without
+integral action settles to its static offset, not to zero. The earlier measure (the raw error
+into a band about zero) is still reported: neither controller can meet it on the hardware rig
+(the SMC's 6-7 Hz relay oscillation is about +-0.25 deg, the FLC's static offset 0.3-0.5 deg,
+both wider than the band), so it compared "not settled" with "not settled".
 """
 
 from __future__ import annotations
@@ -17,7 +29,7 @@ import numpy as np
 from gcs_tools.reproduce import figures
 from gcs_tools.reproduce.experiment import (NOT_REPRODUCED, PARTLY, REPRODUCED, Context, Section, Verdict, fmt,
                                             status_of, table)
-from gcs_tools.reproduce.metrics import hf_rms, shock_response
+from gcs_tools.reproduce.metrics import hf_rms, low_part, settling_about_final, shock_response
 
 NAME = "shocks"
 TITLE = "Hover with shocks on the arms, SMC vs FLC"
@@ -27,6 +39,8 @@ LOG_HZ = 500.0
 CUTOFF_HZ = 5.0
 BAND_FRAC = 0.1
 BAND_MIN_DEG = 0.1
+FINAL_S = 1.0  # the final value: mean of the last second before the next shock
+GUARD_S = 1.0 / CUTOFF_HZ  # the zero-phase low-pass reaches this far back from the next shock: left out
 QUICK_S = 8.0
 AXES = ("phi", "theta", "psi")
 
@@ -47,6 +61,20 @@ def responses(result) -> list:
     return [shock_response(t, err, t0, t1, BAND_FRAC, BAND_MIN_DEG) for t0, t1 in zip(times, ends)]
 
 
+def settling(result, resp) -> list:
+    """Per shock: (settling time about the final value of the error below the chattering
+    cut-off, that final value, the band)."""
+    s = result.series
+    t = s["t"]
+    low = low_part(t, np.degrees(s["euler"] - s["euler_des"]), CUTOFF_HZ)
+    out = []
+    for x in resp:
+        end = x.t_end - GUARD_S  # the filtered next shock (or the end of the record) starts before it
+        out.append(settling_about_final(t, low[:, x.axis], x.t_shock, end, BAND_FRAC, BAND_MIN_DEG,
+                                        min(FINAL_S, (end - x.t_shock) / 2.0)))
+    return out
+
+
 def _median(values) -> float:
     return float(np.median(np.asarray(values, dtype=float))) if len(values) else math.nan
 
@@ -55,11 +83,16 @@ def analyse(ctx: Context, results: list, live=None) -> Section:
     per = {}
     for r in results:
         resp = responses(r)
+        sett = settling(r, resp)
         per[r.job.strategy] = {
-            "shocks": [{"t_s": x.t_shock, "axis": AXES[x.axis], "peak_deg": x.peak, "settling_s": x.settling_s,
-                        "window_s": x.t_end - x.t_shock, "overshoot_pct": x.overshoot_pct} for x in resp],
-            "settled": sum(x.settled for x in resp),
-            "median_settling_s": _median([x.settling_s for x in resp]),
+            "shocks": [{"t_s": x.t_shock, "axis": AXES[x.axis], "peak_deg": x.peak, "settling_s": st[0],
+                        "final_deg": st[1], "band_deg": st[2], "settling_to_zero_s": x.settling_s,
+                        "window_s": x.t_end - x.t_shock, "overshoot_pct": x.overshoot_pct}
+                       for x, st in zip(resp, sett)],
+            "settled": sum(math.isfinite(st[0]) for st in sett),
+            "median_settling_s": _median([st[0] for st in sett]),
+            "settled_to_zero": sum(x.settled for x in resp),
+            "median_settling_to_zero_s": _median([x.settling_s for x in resp]),
             "mean_overshoot_pct": float(np.mean([x.overshoot_pct for x in resp])) if resp else math.nan,
             "mean_abs_peak_deg": float(np.mean([abs(x.peak) for x in resp])) if resp else math.nan,
             "chattering_v_rms": hf_rms(r.series["t"], r.series["v_cmd"], CUTOFF_HZ),
@@ -70,17 +103,22 @@ def analyse(ctx: Context, results: list, live=None) -> Section:
         for x in per[strat]["shocks"]:
             settle = fmt(x["settling_s"], 2) if math.isfinite(x["settling_s"]) else \
                 f"not settled in {fmt(x['window_s'], 1)} s"
-            rows.append([strat.upper(), fmt(x["t_s"], 1), x["axis"], fmt(x["peak_deg"], 2), settle,
-                         fmt(x["overshoot_pct"], 1)])
+            zero = fmt(x["settling_to_zero_s"], 2) if math.isfinite(x["settling_to_zero_s"]) else "not settled"
+            rows.append([strat.upper(), fmt(x["t_s"], 1), x["axis"], fmt(x["peak_deg"], 2), fmt(x["final_deg"], 2),
+                         settle, zero, fmt(x["overshoot_pct"], 1)])
     smc, flc = per["smc"], per["flc"]
     n = len(smc["shocks"])
     body = [
         f"Scenario `hover-shocks` (attitude references zero, {n} shocks of 1 N m for 50 ms on the arms), "
-        f"{int(LOG_HZ)} Hz log. Settling: the attitude error stays within max({BAND_FRAC:.0%} of the peak, "
-        f"{BAND_MIN_DEG} deg) until the next shock. Overshoot: largest excursion past zero after the peak, % of "
+        f"{int(LOG_HZ)} Hz log. Settling (textbook): the attitude error below {CUTOFF_HZ:g} Hz (the chattering "
+        f"removed) stays within max({BAND_FRAC:.0%} of its deviation, {BAND_MIN_DEG} deg) about its final value (mean "
+        f"of the last {FINAL_S:g} s before the next shock) until the next shock; next to it the raw error into the "
+        "same band about zero (a controller without integral action never settles to zero, a chattering one never "
+        "into a band narrower than its chattering). Overshoot: largest excursion past zero after the peak, % of "
         f"the peak. Chattering: RMS of the four motor voltage commands above {CUTOFF_HZ:g} Hz.",
         "",
-        table(["strategy", "shock t (s)", "axis", "peak (deg)", "settling (s)", "overshoot (%)"], rows),
+        table(["strategy", "shock t (s)", "axis", "peak (deg)", "final value (deg)", "settling (s)",
+               "raw, about zero (s)", "overshoot (%)"], rows),
         "",
         table(["strategy", "shocks settled", "median settling", "mean overshoot (%)", "chattering (V rms > 5 Hz)"],
               [[s.upper(), f"{per[s]['settled']}/{n}", _settle(per[s]["median_settling_s"]),
@@ -96,8 +134,9 @@ def analyse(ctx: Context, results: list, live=None) -> Section:
 def _settling_verdict(smc, flc, n) -> Verdict:
     a, b = smc["median_settling_s"], flc["median_settling_s"]
     ok = a < b
-    ev = (f"SMC settled after {smc['settled']}/{n} shocks (median {_settle(a)}), FLC after {flc['settled']}/{n} "
-          f"(median {_settle(b)})")
+    ev = (f"settling about the final value, chattering removed: SMC settled after {smc['settled']}/{n} shocks "
+          f"(median {_settle(a)}), FLC after {flc['settled']}/{n} (median {_settle(b)}); the raw error about zero: "
+          f"SMC {smc['settled_to_zero']}/{n}, FLC {flc['settled_to_zero']}/{n}")
     if not ok and smc["settled"] < n and smc.get("lambda_reading") == "si":
         ev += "; with the paper's SMC gains read in SI (lambda = 0.17 1/s) the SMC recovers over seconds"
     return Verdict("smc_settles_faster", status_of(ok), ev)

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from gcs_tools.reproduce.metrics import (divergence_time, hf_rms, improvement_pct, mean_lag, overshoot_pct,
-                                         settling_time, shock_response, window_mean_abs)
+from gcs_tools.reproduce.metrics import (divergence_time, hf_rms, improvement_pct, low_part, mean_lag, overshoot_pct,
+                                         settling_about_final, settling_time, shock_response, window_mean_abs)
 
 DT = 0.002
 
@@ -52,6 +52,53 @@ def test_not_settled_in_the_window_is_inf():
     assert settling_time(t, np.zeros_like(t), 0.0, 4.0, 1.0) == 0.0
     with pytest.raises(ValueError):
         settling_time(t, e, 5.0, 6.0, 1.0)
+
+
+def test_settling_is_about_the_final_value_not_the_set_point():
+    """Fig. 12: a controller without integral action returns to its static offset after a
+    shock; it has settled (textbook settling time), though never within a band about zero."""
+    t = np.arange(0.0, 4.0, DT)
+    offset, tau = 0.4, 0.2
+    e = offset + 2.0 * np.exp(-t / tau)  # back to a 0.4 deg offset, band 0.2 deg
+    ts, final, band = settling_about_final(t, e, 0.0, t[-1], 0.1, 0.1)
+    assert final == pytest.approx(offset, abs=1e-6) and band == pytest.approx(0.2, rel=1e-6)
+    assert ts == pytest.approx(tau * math.log(10.0), abs=DT)
+    assert settling_time(t, e, 0.0, t[-1], band) == math.inf  # about zero it never settles
+    ts, final, band = settling_about_final(t, 2.0 * np.exp(-t / tau), 0.0, t[-1], 0.1, 0.1)
+    assert final == pytest.approx(0.0, abs=1e-6) and ts == pytest.approx(tau * math.log(10.0), abs=DT)
+    with pytest.raises(ValueError):
+        settling_about_final(t, e, 5.0, 6.0, 0.1, final_s=0.5)
+
+
+def test_a_chattering_response_settles_once_its_chattering_is_removed():
+    """The SMC chatters at 6-7 Hz (relay limit cycle through the motor lag) and still settles:
+    the response below the chattering cut-off settles, the raw error with +-0.3 deg of
+    chattering never enters a 0.2 deg band."""
+    t = np.arange(0.0, 4.0, DT)
+    response = 2.0 * np.exp(-t / 0.15)
+    chatter = 0.3 * np.sin(2 * np.pi * 6.5 * t)
+    raw = response + chatter
+    assert settling_about_final(t, raw, 0.0, t[-1], 0.1, 0.1)[0] > 3.5  # out of the band until the last cycle
+    low = low_part(t, raw, 5.0)
+    ts = settling_about_final(t, low, 0.0, t[-1], 0.1, 0.1)[0]
+    assert ts == pytest.approx(0.15 * math.log(10.0), abs=0.1)
+
+
+@settings(max_examples=30, deadline=None)
+@given(f=st.floats(0.2, 100.0), a=st.floats(0.1, 5.0), cutoff=st.floats(1.0, 20.0))
+def test_low_part_keeps_what_is_well_below_the_cutoff_and_removes_what_is_well_above(f, a, cutoff):
+    assume(f <= cutoff / 2.5 or f >= 2.5 * cutoff)
+    fs = 500.0
+    t = np.arange(5000) / fs
+    x = 3.0 + a * np.sin(2 * np.pi * f * t)
+    mid = slice(1000, 4000)  # away from the ends
+    low = low_part(t, x, cutoff)
+    if f < cutoff:
+        assert np.max(np.abs(low - x)[mid]) <= 0.03 * a
+    else:
+        assert np.max(np.abs(low - 3.0)[mid]) <= 0.03 * a
+    two = low_part(t, np.column_stack([x, -x]), cutoff)
+    assert np.allclose(two[:, 0], low) and np.allclose(two[:, 1], -low)
 
 
 @settings(max_examples=40, deadline=None)
