@@ -261,7 +261,11 @@ def cmd_calibrate(args) -> int:
 
 
 def cmd_params(args) -> int:
-    cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=_overrides(args))
+    overrides = _overrides(args)
+    if args.controller:
+        overrides["controller.plugin"] = args.controller
+    cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
+    plugin_lines = _plugin_param_lines(cfg)  # loads the plug-in first: a bad one is refused before any listing
     for key, spec in SCHEMA.items():
         unit = f" [{spec.unit}]" if spec.unit else ""
         values = spec.describe_values()
@@ -271,7 +275,55 @@ def cmd_params(args) -> int:
         for name, field in spec.item.items():  # the fields of each entry of a list of tables
             field_unit = f" [{field.unit}]" if field.unit else ""
             print(f"    .{name}{field_unit}: {field.describe_values()}: {field.doc}")
+        if key == "controller.params":
+            for line in plugin_lines:
+                print(line)
     return 0
+
+
+def _plugin_param_lines(cfg) -> list[str]:
+    """The parameters of the config's controller plug-in (``controller.plugin``, or
+    ``--controller``) as ``rig-emulator params`` lists the rest: ``controller.params.NAME =
+    value [unit]  (allowed values; default ...)`` then its doc and, when served, its MAVLink names."""
+    plugin = cfg["controller.plugin"]
+    if not plugin:
+        return []
+    from rig_emulator.controllers import PluginError, load_controller
+    from rig_emulator.link.parameters.plugin_params import plugin_params
+
+    ctrl = load_controller(plugin, cfg["controller.params"])
+    defaults = load_controller(plugin).params  # what it flies with when the config sets nothing
+    cp = ctrl.params
+    served: dict[str, list[str]] = {}
+    not_served = ""
+    try:
+        for p in plugin_params(ctrl, 0, set()):
+            served.setdefault(p.param, []).append(p.name)
+    except PluginError as exc:
+        not_served = f"; not servable over MAVLink: {exc.problem}"
+    lines = []
+    for name in cp.names():
+        info = cp.info.get(name, {})
+        lo, hi = cp.limits(name)
+        unit = str(info.get("unit", ""))
+        rng = "any finite number" if math.isinf(lo) and math.isinf(hi) else f"in [{lo:g}, {hi:g}]"
+        value, default = getattr(cp, name), getattr(defaults, name)
+        if cp._scalar[name]:
+            values = rng
+        else:
+            n = len(value)
+            values = f"{n} finite numbers" if rng == "any finite number" else f"{n} numbers, each {rng}"
+            value, default = [float(v) for v in value], [float(v) for v in default]
+        doc = str(info.get("doc", f"parameter {name!r} of controller {plugin}"))
+        names = served.get(name, [])
+        if names:
+            doc += "; served as " + (names[0] if len(names) == 1 else f"{names[0]}..{names[-1]}")
+        doc += not_served
+        unit_text = f" [{unit}]" if unit else ""
+        lines.append(f"controller.params.{name} = {value!r}{unit_text}  ({values}; default {default!r})\n    {doc}")
+    if not lines:
+        lines.append(f"    (controller {plugin} declares no parameters)")
+    return lines
 
 
 def cmd_scenarios(args) -> int:
@@ -322,6 +374,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("params", help="list every parameter with its value and allowed range")
     p.add_argument("--scenario")
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="also list this controller plug-in's own parameters (controller.params.NAME, with their "
+                        "ranges and defaults); without it, those of the config's controller.plugin, if any")
     _add_config_args(p)
     p.set_defaults(func=cmd_params)
 
