@@ -3,7 +3,8 @@
 * ``rig-emulator simulate --scenario NAME --strategy NAME --duration S --seed N [--out FILE]``
   runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors;
   ``--controller package.module:Name`` flies a controller plug-in (docs/YOUR_CONTROLLER.md).
-* ``rig-emulator params [--scenario NAME]`` lists every parameter with its value, unit and range.
+* ``rig-emulator params [--scenario NAME] [--controller MODULE:NAME]`` lists every parameter with its value, unit and
+  range, a controller plug-in's own ones (``controller.params.NAME``) with their defaults.
 * ``rig-emulator scenarios`` lists the scenario and airframe presets.
 * ``rig-emulator serve [--mavlink URL ...] [--speedup X] ...`` (also ``rig-emulator`` with no
   subcommand) runs the rig and serves MAVLink (see :mod:`rig_emulator.link.serve`).
