@@ -106,6 +106,7 @@ def cmd_simulate(args) -> int:
     if args.controller:
         overrides["controller.plugin"] = args.controller
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
+    _params_need_a_plugin(cfg)
     if args.omega is not None and not (cfg["guidance.type"] == "attitude"
                                        and any(a != 0.0 for a in cfg["guidance.amplitude_deg"])):
         raise ConfigError(f"--omega: scenario {args.scenario!r} flies no harmonic reference (Eq. 44), so --omega would "
@@ -116,6 +117,14 @@ def cmd_simulate(args) -> int:
     if out is not None and out.suffix == ".tlog":
         return _simulate_to_tlog(args, cfg, out, start)
     return _simulate_streamed(args, cfg, out, start)
+
+
+def _params_need_a_plugin(cfg) -> None:
+    """``controller.params`` set with no plug-in to take them would change nothing: refused."""
+    if cfg["controller.params"] and not cfg["controller.plugin"]:
+        names = ", ".join(f"controller.params.{n}" for n in cfg["controller.params"])
+        raise ConfigError(f"{names}: no controller plug-in flies to take it (name one with --controller MODULE:NAME "
+                          "or controller.plugin)")
 
 
 def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
@@ -230,6 +239,14 @@ def cmd_serve(args) -> int:
         overrides["control.strategy"] = args.strategy
     if args.controller:
         overrides["controller.plugin"] = args.controller
+    if any(k == "controller.params" or k.startswith("controller.params.") for k in overrides) or args.config:
+        try:
+            cfg = load_config(airframe=args.airframe, scenario=getattr(args, "scenario", None), files=args.config,
+                              overrides=overrides)
+        except ConfigError:
+            cfg = None  # serve reports a bad configuration its own way
+        if cfg is not None:
+            _params_need_a_plugin(cfg)
     return serve(args, overrides)
 
 

@@ -139,3 +139,10 @@ def test_every_shipped_example_can_be_served():
 
     for spec in (HOVER, LQR, PID):
         assert plugin_params(load_controller(spec), 0, set())  # names fit MAVLink's 16 characters
+
+
+def test_plugin_parameters_without_a_plugin_are_refused():
+    p = _run("simulate", "--scenario", "hover", "--duration", "1", "--set", "controller.params.kp_z=2")
+    assert p.returncode == 2 and "controller.params.kp_z: no controller plug-in flies to take it" in p.stderr, p.stderr
+    p = _run("serve", "--no-persist", "--mavlink", "tcpin:127.0.0.1:0", "--set", "controller.params.kp_z=2")
+    assert p.returncode == 2 and "controller.params.kp_z: no controller plug-in flies to take it" in p.stderr, p.stderr
