@@ -3,7 +3,8 @@
 * ``rig-emulator simulate --scenario NAME --strategy NAME --duration S --seed N [--out FILE]``
   runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors;
   ``--controller package.module:Name`` flies a controller plug-in (docs/YOUR_CONTROLLER.md).
-* ``rig-emulator params [--scenario NAME]`` lists every parameter with its value, unit and range.
+* ``rig-emulator params [--scenario NAME] [--controller MODULE:NAME]`` lists every parameter with its value, unit and
+  range, a controller plug-in's own ones (``controller.params.NAME``) with their defaults.
 * ``rig-emulator scenarios`` lists the scenario and airframe presets.
 * ``rig-emulator serve [--mavlink URL ...] [--speedup X] ...`` (also ``rig-emulator`` with no
   subcommand) runs the rig and serves MAVLink (see :mod:`rig_emulator.link.serve`).
@@ -105,6 +106,7 @@ def cmd_simulate(args) -> int:
     if args.controller:
         overrides["controller.plugin"] = args.controller
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
+    _params_need_a_plugin(cfg)
     if args.omega is not None and not (cfg["guidance.type"] == "attitude"
                                        and any(a != 0.0 for a in cfg["guidance.amplitude_deg"])):
         raise ConfigError(f"--omega: scenario {args.scenario!r} flies no harmonic reference (Eq. 44), so --omega would "
@@ -115,6 +117,14 @@ def cmd_simulate(args) -> int:
     if out is not None and out.suffix == ".tlog":
         return _simulate_to_tlog(args, cfg, out, start)
     return _simulate_streamed(args, cfg, out, start)
+
+
+def _params_need_a_plugin(cfg) -> None:
+    """``controller.params`` set with no plug-in to take them would change nothing: refused."""
+    if cfg["controller.params"] and not cfg["controller.plugin"]:
+        names = ", ".join(f"controller.params.{n}" for n in cfg["controller.params"])
+        raise ConfigError(f"{names}: no controller plug-in flies to take it (name one with --controller MODULE:NAME "
+                          "or controller.plugin)")
 
 
 def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
@@ -229,6 +239,14 @@ def cmd_serve(args) -> int:
         overrides["control.strategy"] = args.strategy
     if args.controller:
         overrides["controller.plugin"] = args.controller
+    if any(k == "controller.params" or k.startswith("controller.params.") for k in overrides) or args.config:
+        try:
+            cfg = load_config(airframe=args.airframe, scenario=getattr(args, "scenario", None), files=args.config,
+                              overrides=overrides)
+        except ConfigError:
+            cfg = None  # serve reports a bad configuration its own way
+        if cfg is not None:
+            _params_need_a_plugin(cfg)
     return serve(args, overrides)
 
 
@@ -261,7 +279,11 @@ def cmd_calibrate(args) -> int:
 
 
 def cmd_params(args) -> int:
-    cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=_overrides(args))
+    overrides = _overrides(args)
+    if args.controller:
+        overrides["controller.plugin"] = args.controller
+    cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
+    plugin_lines = _plugin_param_lines(cfg)  # loads the plug-in first: a bad one is refused before any listing
     for key, spec in SCHEMA.items():
         unit = f" [{spec.unit}]" if spec.unit else ""
         values = spec.describe_values()
@@ -271,7 +293,55 @@ def cmd_params(args) -> int:
         for name, field in spec.item.items():  # the fields of each entry of a list of tables
             field_unit = f" [{field.unit}]" if field.unit else ""
             print(f"    .{name}{field_unit}: {field.describe_values()}: {field.doc}")
+        if key == "controller.params":
+            for line in plugin_lines:
+                print(line)
     return 0
+
+
+def _plugin_param_lines(cfg) -> list[str]:
+    """The parameters of the config's controller plug-in (``controller.plugin``, or
+    ``--controller``) as ``rig-emulator params`` lists the rest: ``controller.params.NAME =
+    value [unit]  (allowed values; default ...)`` then its doc and, when served, its MAVLink names."""
+    plugin = cfg["controller.plugin"]
+    if not plugin:
+        return []
+    from rig_emulator.controllers import PluginError, load_controller
+    from rig_emulator.link.parameters.plugin_params import plugin_params
+
+    ctrl = load_controller(plugin, cfg["controller.params"])
+    defaults = load_controller(plugin).params  # what it flies with when the config sets nothing
+    cp = ctrl.params
+    served: dict[str, list[str]] = {}
+    not_served = ""
+    try:
+        for p in plugin_params(ctrl, 0, set()):
+            served.setdefault(p.param, []).append(p.name)
+    except PluginError as exc:
+        not_served = f"; not servable over MAVLink: {exc.problem}"
+    lines = []
+    for name in cp.names():
+        info = cp.info.get(name, {})
+        lo, hi = cp.limits(name)
+        unit = str(info.get("unit", ""))
+        rng = "any finite number" if math.isinf(lo) and math.isinf(hi) else f"in [{lo:g}, {hi:g}]"
+        value, default = getattr(cp, name), getattr(defaults, name)
+        if cp._scalar[name]:
+            values = rng
+        else:
+            n = len(value)
+            values = f"{n} finite numbers" if rng == "any finite number" else f"{n} numbers, each {rng}"
+            value, default = [float(v) for v in value], [float(v) for v in default]
+        doc = str(info.get("doc", f"parameter {name!r} of controller {plugin}"))
+        names = served.get(name, [])
+        if names:
+            doc += "; served as " + (names[0] if len(names) == 1 else f"{names[0]}..{names[-1]}")
+        doc += not_served
+        unit_text = f" [{unit}]" if unit else ""
+        lines.append(f"controller.params.{name} = {value!r}{unit_text}  ({values}; default {default!r})\n    {doc}")
+    if not lines:
+        lines.append(f"    (controller {plugin} declares no parameters)")
+    return lines
 
 
 def cmd_scenarios(args) -> int:
@@ -322,6 +392,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("params", help="list every parameter with its value and allowed range")
     p.add_argument("--scenario")
+    p.add_argument("--controller", metavar="MODULE:NAME",
+                   help="also list this controller plug-in's own parameters (controller.params.NAME, with their "
+                        "ranges and defaults); without it, those of the config's controller.plugin, if any")
     _add_config_args(p)
     p.set_defaults(func=cmd_params)
 

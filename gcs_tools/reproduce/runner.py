@@ -115,7 +115,11 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
         from rig_emulator.controllers import PluginError, load_controller
 
         try:
-            load_controller(controller)  # a plug-in that cannot load is a usage error, before anything runs
+            from rig_emulator.config.loader import fold_plugin_params
+
+            # a plug-in that cannot load, or a --set controller.params.NAME it refuses, is a usage
+            # error, before anything runs
+            load_controller(controller, fold_plugin_params(overrides or {}).get("controller.params"))
         except PluginError as exc:
             raise UsageError(f"--controller: {exc}") from None
         exps, with_stability = select(only) if only else ([], False)

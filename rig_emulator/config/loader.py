@@ -226,8 +226,35 @@ def _unknown(key: str) -> ConfigError:
     return ConfigError(f"unknown parameter {key!r}{suffix}")
 
 
+PLUGIN_PARAMS = "controller.params"
+
+
+def fold_plugin_params(flat: Mapping[str, Any], current: Mapping[str, Any] | None = None) -> Mapping[str, Any]:
+    """``controller.params.NAME = value`` keys (``--set controller.params.kp=1``) folded into the
+    one parameter ``controller.params`` (a table, over ``flat``'s own table or else ``current``'s);
+    ``flat`` itself when it has none. The plug-in's own rules (its names, the ``param_info``
+    ranges) are checked where the plug-in is loaded (:func:`rig_emulator.controllers.load_controller`)."""
+    dotted = [k for k in flat if isinstance(k, str) and k.startswith(PLUGIN_PARAMS + ".")]
+    if not dotted:
+        return flat
+    out = {k: v for k, v in flat.items() if k not in dotted}
+    table = out.get(PLUGIN_PARAMS, (current or {}).get(PLUGIN_PARAMS, {}))
+    if not isinstance(table, Mapping):
+        raise ConfigError(f"{PLUGIN_PARAMS}: must be a table of overrides ([{PLUGIN_PARAMS}] in TOML)")
+    table = dict(table)
+    for key in dotted:
+        name = key[len(PLUGIN_PARAMS) + 1:]
+        if not name.isidentifier():
+            raise ConfigError(f"unknown parameter {key!r}: a plug-in parameter is {PLUGIN_PARAMS}.NAME, NAME a "
+                              "Python identifier (a list parameter is set whole, e.g. controller.params.k=[1,2,3])")
+        table[name] = flat[key]
+    out[PLUGIN_PARAMS] = table
+    return out
+
+
 def validate(flat: Mapping[str, Any]) -> RigConfig:
     """Check every key of a flat config; raise :class:`ConfigError` naming the first bad one."""
+    flat = fold_plugin_params(flat)
     unknown = [k for k in flat if k not in SCHEMA]
     if unknown:
         raise _unknown(unknown[0])
@@ -244,6 +271,7 @@ def _validate_over(base: RigConfig, overrides: Mapping[str, Any], copy_base: boo
     checked key by key, in schema order as :func:`validate` does, then the cross-key checks.
     ``copy_base=False`` shares the base's values with the result (for a check whose result is
     thrown away)."""
+    overrides = fold_plugin_params(overrides, base)
     for k in overrides:
         if k not in SCHEMA:
             raise _unknown(k)

@@ -131,7 +131,9 @@ SCHEMA: dict[str, Spec] = {
     "controller.plugin": Spec("str", "controller plug-in 'package.module:Name' flying instead of (part of) the strategy "
                                      "(docs/YOUR_CONTROLLER.md); empty: the built-in strategy alone",
                              values="'package.module:Name', or empty"),
-    "controller.params": Spec("params", "the plug-in's own parameters (name = number or list of numbers) over its defaults"),
+    "controller.params": Spec("params", "the plug-in's own parameters (name = number or list of numbers) over its defaults; "
+                                       "one at a time: --set controller.params.NAME=VALUE; listed below with "
+                                       "--controller (or a controller.plugin)"),
     "controller.call": S("how a compiled plug-in runs: 'compiled' (inside the compiled loop) or 'python' (its kernel as "
                          "plain Python, e.g. to debug it)", ("compiled", "python")),
     "control.max_tilt_deg": F("tilt limit of the Eq. 35 singularity guard", "deg", 1.0, 80.0),

@@ -99,18 +99,36 @@ class ControllerParams:
         return self._slices[name]
 
     def set(self, name: str, value) -> None:
-        """Set one parameter (a number, or as many numbers as its default has); validated."""
+        """Set one parameter (a number, or as many numbers as its default has); validated. The
+        errors name the parameter as the config does (``controller.params.NAME``) and its range."""
+        key = f"controller.params.{name}"
         if name not in self._slices:
-            raise PluginError(self.owner, f"unknown parameter {name!r}; it has {', '.join(self._slices) or 'none'}")
+            import difflib
+
+            hint = difflib.get_close_matches(str(name), self._slices, n=1)
+            did = f" (did you mean 'controller.params.{hint[0]}'?)" if hint else ""
+            raise PluginError(self.owner, f"unknown parameter {key!r}{did}; its parameters: "
+                                          f"{', '.join(self._slices) or 'none'}")
         sl = self._slices[name]
-        v = np.atleast_1d(np.asarray(value, dtype=np.float64)).ravel()
-        if v.size != sl.stop - sl.start:
-            raise PluginError(self.owner, f"parameter {name!r}: expected {sl.stop - sl.start} value(s), got {v.size}")
-        if not np.all(np.isfinite(v)):
-            raise PluginError(self.owner, f"parameter {name!r}: values must be finite, got {value!r}")
+        n = sl.stop - sl.start
         lo, hi = self.limits(name)
+        unit = self.info.get(name, {}).get("unit", "")
+        bounded = not (math.isinf(lo) and math.isinf(hi))
+        rng = f"in [{lo:g}, {hi:g}]" + (f" {unit}" if unit else "")
+        if self._scalar[name]:
+            what = f"a number {rng}" if bounded else "a finite number"
+        else:
+            what = f"{n} numbers, each {rng}" if bounded else f"{n} finite numbers"
+        try:
+            v = np.atleast_1d(np.asarray(value, dtype=np.float64)).ravel()
+        except (TypeError, ValueError):
+            raise PluginError(self.owner, f"{key} = {value!r}: must be {what}") from None
+        if v.size != n:
+            raise PluginError(self.owner, f"{key} = {value!r}: must be {what} (got {v.size} value(s))")
+        if not np.all(np.isfinite(v)):
+            raise PluginError(self.owner, f"{key} = {value!r}: must be finite" + (f", {rng}" if bounded else ""))
         if np.any(v < lo) or np.any(v > hi):
-            raise PluginError(self.owner, f"parameter {name!r}: {value!r} is outside [{lo:g}, {hi:g}]")
+            raise PluginError(self.owner, f"{key} = {value!r}: must be {rng}")
         self.array[sl] = v
 
     def limits(self, name: str) -> tuple[float, float]:

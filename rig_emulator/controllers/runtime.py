@@ -233,12 +233,18 @@ class PythonCall(WrapperAddressProtocol):
             try:
                 if obs_array[PL.O_RESET] != 0.0:
                     reset()
-                _store(update(t, obs), out, unit)
-                return 0
+                result = update(t, obs)
             except BaseException as exc:  # noqa: BLE001 - reported by the caller, KeyboardInterrupt re-raised there
                 bound.exc = exc
                 bound.exc_where = _where(exc)
                 return 1
+            try:
+                _store(result, out, unit)
+            except (TypeError, ValueError) as exc:  # what update returned is wrong: point at update, not here
+                bound.exc = exc
+                bound.exc_where = _returned_by(update)
+                return 1
+            return 0
 
         self._callback = _CALLBACK(callback)
         self._address = ctypes.cast(self._callback, ctypes.c_void_p).value
@@ -256,6 +262,15 @@ def _where(exc: BaseException) -> str:
         return ""
     last = tb[-1]
     return f" ({last.filename}:{last.lineno} in {last.name})"
+
+
+def _returned_by(update) -> str:
+    """`` (returned by FILE:LINE, QUALNAME)`` of a controller's ``update`` method."""
+    fn = getattr(update, "__func__", update)
+    code = getattr(fn, "__code__", None)
+    if code is None:
+        return ""
+    return f" (returned by {getattr(fn, '__qualname__', code.co_name)}, {code.co_filename}:{code.co_firstlineno})"
 
 
 def _store(result, out: np.ndarray, unit: str) -> None:

@@ -392,6 +392,9 @@ class LiveRig:
         return self.set_params({key: value})
 
     def set_params(self, changes: dict) -> RigConfig:
+        from rig_emulator.config.loader import fold_plugin_params
+
+        changes = dict(fold_plugin_params(changes, self.cfg))  # controller.params.NAME -> controller.params
         for key in changes:
             if key in _RESTART_ONLY and changes[key] != self.cfg.get(key):
                 raise ConfigError(f"{key}: cannot change while the rig runs; restart it with the new value")

@@ -14,6 +14,12 @@ class LevelHover(Controller):
     commands = "motor_thrusts"
     param_prefix = "HOV_"
     params = {"kp_att": 8.0, "kd_att": 2.0, "kp_z": 4.0, "kd_z": 3.0}
+    param_info = {  # the ranges every change is checked against (config, --set, PARAM_SET)
+        "kp_att": {"min": 0.0, "max": 100.0, "unit": "N/rad", "doc": "roll and pitch stiffness (per motor pair)"},
+        "kd_att": {"min": 0.0, "max": 20.0, "unit": "N s/rad", "doc": "roll and pitch damping (per motor pair)"},
+        "kp_z": {"min": 0.0, "max": 50.0, "unit": "1/s^2", "doc": "altitude stiffness"},
+        "kd_z": {"min": 0.0, "max": 20.0, "unit": "1/s", "doc": "altitude damping"},
+    }
 
     def update(self, t, obs):
         p = self.params

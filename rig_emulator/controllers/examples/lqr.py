@@ -62,7 +62,7 @@ class LQRAttitude(CompiledController):
     state_size = 3
     param_prefix = "LQR_"
     weights = {"roll": (400.0, 1e4, 100.0, 1.0), "pitch": (400.0, 1e4, 100.0, 1.0), "yaw": (100.0, 1e3, 30.0, 1.0)}
-    params = {"k": [0.0] * 9, "integral_limit": 0.5}
+    params = {"k": [0.0] * 9, "i_limit": 0.5}  # LQR_K1..LQR_K9, LQR_I_LIMIT
 
     def __init__(self, **params):
         super().__init__(**params)

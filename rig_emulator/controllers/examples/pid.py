@@ -113,5 +113,5 @@ class PID(CompiledController):
     params = {
         "att_kp": [100.0, 100.0, 16.0], "att_ki": [20.0, 20.0, 2.0], "att_kd": [20.0, 20.0, 8.0],
         "pos_kp": [2.0, 2.0, 4.0], "pos_ki": [0.2, 0.2, 0.8], "pos_kd": [2.5, 2.5, 4.0],
-        "integral_limit": 2.0,
+        "i_limit": 2.0,  # served as XPID_I_LIMIT (a MAVLink name has at most 16 characters)
     }

@@ -23,3 +23,10 @@ def test_controller_comparison_report(tmp_path):
 def test_unloadable_controller_is_a_usage_error(tmp_path):
     with pytest.raises(UsageError, match="--controller: controller nope.mod:X: cannot import"):
         reproduce(tmp_path, quick=True, workers=1, show_progress=False, controller="nope.mod:X")
+
+
+def test_a_refused_plugin_parameter_is_a_usage_error_before_anything_runs(tmp_path):
+    with pytest.raises(UsageError, match=r"--controller: .*unknown parameter 'controller.params.kq'"):
+        reproduce(tmp_path, quick=True, workers=1, show_progress=False, controller=LQR,
+                  overrides={"controller.params.kq": 1.0})
+    assert not (tmp_path / "report.md").exists()

@@ -30,7 +30,7 @@ def test_example_defaults_are_the_presets_gains():
     for ours, key in (("att_kp", "pid.attitude_kp"), ("att_ki", "pid.attitude_ki"), ("att_kd", "pid.attitude_kd"),
                       ("pos_kp", "pid.position_kp"), ("pos_ki", "pid.position_ki"), ("pos_kd", "pid.position_kd")):
         assert list(getattr(p, ours)) == cfg[key]
-    assert p.integral_limit == cfg["pid.integral_limit"]
+    assert p.i_limit == cfg["pid.integral_limit"]
 
 
 @pytest.mark.parametrize("call", ["compiled", "python"])

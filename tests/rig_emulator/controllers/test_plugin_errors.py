@@ -65,8 +65,22 @@ def test_exception_at_3s_names_plugin_time_and_problem():
 
 
 def test_wrong_return_shape():
-    with pytest.raises(PluginError, match=r"ThreeNumbers at t = 0\.000 s: ValueError: update\(\) must return 4 numbers"):
+    with pytest.raises(PluginError, match=r"ThreeNumbers at t = 0\.000 s: ValueError: update\(\) must return 4 numbers"
+                                          r".*, got 3 \(returned by ThreeNumbers\.update, .*test_plugin_errors\.py:\d+\)$"):
         _fly(ThreeNumbers, 0.5)
+
+
+class Text(Hover):
+    def update(self, t, obs):
+        return ("a", "b", "c", "d")
+
+
+def test_a_return_that_is_not_numbers_points_at_update_not_at_the_rig():
+    with pytest.raises(PluginError) as info:
+        _fly(Text, 0.5)
+    msg = str(info.value)
+    assert "Text at t = 0.000 s: ValueError" in msg and "returned by Text.update" in msg
+    assert "runtime.py" not in msg
 
 
 def test_nan_command():

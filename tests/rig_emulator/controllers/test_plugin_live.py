@@ -31,7 +31,7 @@ def test_parameters_change_while_flying():
     rig.step(100)
     rig.set_params({"controller.params": {"kp_z": 2.5}})
     assert rig.controller.params.kp_z == 2.5 and rig.controller.params.kd_z == 3.0
-    with pytest.raises(PluginError, match="unknown parameter 'nope'"):
+    with pytest.raises(PluginError, match="unknown parameter 'controller.params.nope'"):
         rig.set_params({"controller.params": {"nope": 1.0}})
     assert rig.controller.params.kp_z == 2.5 and rig.cfg["controller.params"] == {"kp_z": 2.5}
     with pytest.raises(ConfigError, match="controller.plugin: cannot change while the rig runs"):

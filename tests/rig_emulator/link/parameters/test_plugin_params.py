@@ -59,5 +59,5 @@ def test_the_component_metadata_describes_them():
 
 def test_config_values_are_checked_against_the_declared_range():
     cfg = load_config(scenario="hover", overrides={"controller.params": {"kp_z": 30.0}})
-    with pytest.raises(PluginError, match=r"parameter 'kp_z': 30.0 is outside \[0, 20\]"):
+    with pytest.raises(PluginError, match=r"controller.params.kp_z = 30.0: must be in \[0, 20\] 1/s\^2"):
         LiveRig(cfg, controller=Ranged)
