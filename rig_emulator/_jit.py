@@ -25,9 +25,15 @@ function they are inlined into). Such a function must not allocate (numba refuse
 compile ``np.empty`` or a whole-slice copy without NRT, as the no-allocation-per-step rule
 wants) and must not be called from Python with a ``numpy.random.Generator`` (unboxing one
 takes a reference that only NRT releases: a leak per call); the loop's entry point
-therefore keeps NRT and hands over to an ``nrt=False`` body. The flag is always set
+therefore takes the generator's bit generator instead (``rig_emulator/simulation/rng_bits.py``;
+an NRT wrapper around the loop compiled the whole loop twice). The flag is always set
 explicitly, so a function never inherits it from whichever caller happened to compile it
 first (numba would otherwise, and its cache does not tell the two apart).
+
+An ``nrt=False`` function is also compiled without numba's CPython wrapper (it is called
+from compiled code; a call from Python runs a twin compiled with one), and no function gets
+numba's C-callable wrapper: compiling wrappers nothing calls was a tenth of the cold compile
+(issue 14, benchmarks/README.md "Cold compile").
 
 Set ``HILMS_NUMBA_CACHE`` to choose the cache root (default ``~/.cache/hilms-sil``).
 """
@@ -37,6 +43,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import types
 from pathlib import Path
 
 import numba
@@ -97,12 +104,69 @@ numba.config.CACHE_DIR = CACHE_DIR
 _prune(CACHE_DIR)
 
 
-def jit(*args, nrt=True, **kwargs):
+class _LoopOnly:
+    """Mixin of a dispatcher compiled without numba's CPython wrapper (see :func:`jit`)."""
+
+    def __call__(self, *args, **kwargs):
+        twin = self.__dict__.get("_python_twin")
+        if twin is None:
+            twin = self.__dict__["_python_twin"] = _python_twin(self)
+        return twin(*args, **kwargs)
+
+
+def _python_twin(dispatcher):
+    """The same function compiled with its CPython wrapper, for calls from Python (tests,
+    debugging); its own name ``<name>_py`` gives it its own entries in numba's cache."""
+    f = dispatcher.py_func
+    g = types.FunctionType(f.__code__, f.__globals__, f.__name__, f.__defaults__, f.__closure__)
+    g.__qualname__ = f.__qualname__ + "_py"
+    g.__module__ = f.__module__
+    g.__doc__ = f.__doc__
+    opts = dict(dispatcher.targetoptions)
+    opts.pop("no_cpython_wrapper", None)
+    opts.pop("nopython", None)
+    return numba.njit(cache=dispatcher.__dict__.get("_cache_twin", True), **opts)(g)
+
+
+def jit(*args, nrt=True, python=None, **kwargs):
     """``numba.njit(cache=True)``; usable bare (``@jit``) or with options (``@jit(inline='always')``,
-    ``@jit(nrt=False)``: no reference counting, see the module docstring)."""
+    ``@jit(nrt=False)``: no reference counting, see the module docstring).
+
+    ``python``: compile numba's CPython wrapper (the code that unboxes every argument when
+    Python calls the function). Default: only with ``nrt=True``; an ``nrt=False`` function is
+    part of the step loop, called from compiled code only, and compiling a wrapper for its
+    namedtuples of arrays that nothing calls cost about a tenth of the cold compile (issue 14).
+    Called from Python anyway (a test), it runs a twin compiled with the wrapper. No function
+    gets numba's C-callable (cfunc) wrapper: nothing takes a jitted function's address.
+    """
     kwargs.setdefault("cache", True)
     kwargs.setdefault("fastmath", False)
+    kwargs.setdefault("no_cfunc_wrapper", True)
     kwargs["_nrt"] = bool(nrt)  # numba's own name for the option
+    if python is None:
+        python = bool(nrt) or kwargs.get("inline") == "always"
+    if not python:
+        kwargs["no_cpython_wrapper"] = True
+
+    def wrap(f):
+        d = numba.njit(**kwargs)(f)
+        if not python:
+            d.__class__ = _loop_only_class(type(d))
+            d._cache_twin = bool(kwargs["cache"])
+        return d
+
     if len(args) == 1 and callable(args[0]):
-        return numba.njit(**kwargs)(args[0])
-    return numba.njit(*args, **kwargs)
+        return wrap(args[0])
+    if args:
+        raise TypeError("jit: signatures are not supported here")
+    return wrap
+
+
+_LOOP_ONLY: dict = {}
+
+
+def _loop_only_class(cls):
+    sub = _LOOP_ONLY.get(cls)
+    if sub is None:
+        sub = _LOOP_ONLY[cls] = type("LoopOnly" + cls.__name__, (_LoopOnly, cls), {"__module__": __name__})
+    return sub

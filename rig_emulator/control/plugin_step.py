@@ -16,7 +16,6 @@ per plug-in.
 import math
 from collections import namedtuple
 
-import numba
 from numba import types
 
 from rig_emulator._jit import jit
@@ -224,9 +223,3 @@ def _call(k, t, period, first, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx
         pl.status[S_RETURN] = rc
         return False
     return True
-
-
-@numba.cfunc(PLUGIN_SIG, cache=True)
-def no_plugin(t, obs, params, state, out):
-    """The function pointer the loop gets when no plug-in is loaded (never called then)."""
-    return 0

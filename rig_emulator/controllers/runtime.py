@@ -20,7 +20,7 @@ from numba import carray
 from numba.core.types.function_type import WrapperAddressProtocol
 
 from rig_emulator.control import plugin_layout as PL
-from rig_emulator.control.plugin_step import PLUGIN_SIG, PluginParams, no_plugin
+from rig_emulator.control.plugin_step import PLUGIN_SIG, PluginParams
 from rig_emulator.controllers.base import ALLOWED, COMMANDS, REPLACES, Command, CompiledController, Controller, PluginError
 from rig_emulator.controllers.observation import Observation
 
@@ -123,7 +123,8 @@ def no_plugin_binding(external: bool = False) -> BoundPlugin:
     mode = PL.P_EXTERNAL if external else PL.P_NONE
     params = PluginParams(mode, 0, 1, False, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(PL.OUT_SIZE),
                           np.zeros(PL.STATUS_SIZE, dtype=np.int64))
-    return BoundPlugin(params, no_plugin, name="external motor commands" if external else "")
+    # fn None: the loop's plug-in branch is pruned at compile time (not compiled at all)
+    return BoundPlugin(params, None, name="external motor commands" if external else "")
 
 
 def _divisor(name: str, what: str, rate: float, base: float) -> int:

@@ -86,7 +86,7 @@ def _advance(t, pos, gp, gstate):
         _start_leg(t, pos, gp, gstate)
 
 
-@jit(nrt=False)
+@jit(nrt=False, python=True)  # also called from Python (live rig: missions)
 def start_at(index, t, pos, gp, gstate):
     """Begin flying to waypoint ``index`` on a virtual line from ``pos`` at time t."""
     gstate[GS_STARTED] = 1.0

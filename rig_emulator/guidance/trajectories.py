@@ -5,7 +5,7 @@ import math
 from rig_emulator._jit import jit
 
 
-@jit(nrt=False)
+@jit(nrt=False, python=True)  # also called from Python (gcs_tools missions)
 def helix_eq46(t, pos, vel, acc):
     """Eq. 46 exactly as published (metres, seconds).
 

@@ -28,7 +28,7 @@ def quat_normalize(q):
     q[3] /= n
 
 
-@jit(nrt=False)
+@jit(nrt=False, python=True)  # also called from Python (live rig, offboard set-points)
 def quat_to_rot(q0, q1, q2, q3, R):
     """Rotation matrix of the unit quaternion (q0 scalar) into the 3x3 array ``R``."""
     R[0, 0] = 1.0 - 2.0 * (q2 * q2 + q3 * q3)

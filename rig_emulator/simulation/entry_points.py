@@ -33,6 +33,8 @@ def arg_key(a):
         return (a.dtype, a.ndim, layout, f.writeable, f.aligned)
     if t in _SCALARS:
         return t
+    if isinstance(a, np.random.BitGenerator):  # the loop's rng travels as its bit generator (rng_bits.py)
+        return t
     if t is int:
         return t if _INT64[0] <= a < _INT64[1] else None
     sig = _function_signature(a)

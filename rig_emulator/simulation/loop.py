@@ -14,6 +14,9 @@ health and loss of control; when its failsafe disarms, the rest of the call runs
 A controller plug-in (``pl``, ``pfn``; :mod:`rig_emulator.control.plugin_step`) replaces the
 built-in control update when ``pl.mode`` is not ``P_NONE``; with ``P_EXTERNAL`` no
 controller runs and the motor voltages ``v_cmd`` are whatever the caller set (lockstep).
+Without a plug-in ``pfn`` is None: numba prunes the plug-in branch at compile time, so the
+loop a rig without a plug-in compiles leaves the plug-in path out (a rig with one compiles
+its own specialisation, with it; issue 14).
 
 Reading: the accelerometers' lever-arm term uses the angular acceleration of the
 previous step's first RK4 stage.
@@ -36,7 +39,7 @@ from rig_emulator.control.controller import (
     REF_VEL,
     control_update,
 )
-from rig_emulator.control.plugin_layout import P_EXTERNAL, P_NONE
+from rig_emulator.control.plugin_layout import P_NONE
 from rig_emulator.control.plugin_step import plugin_control
 from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
 from rig_emulator.estimation.load_cell_filter import load_cell_filter_step
@@ -49,6 +52,7 @@ from rig_emulator.physics.motors import rotor_speed
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates
 from rig_emulator.sensors.sensor_step import SAMPLED_CELLS, sensors_step
 from rig_emulator.simulation import log_layout as L
+from rig_emulator.simulation.rng_bits import generator
 
 
 @jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
@@ -70,38 +74,22 @@ def _sense(k, x, pp, sp, ss, rng, omega_dot):
         ss.health[1] = load_cell_filter_step(ss.cell_raw, sp.lcp, ss.lcs, ss.thrust_est)
 
 
-@jit
+@jit(nrt=False, python=True)  # Python's entry point; see rig_emulator/simulation/rng_bits.py for rng_bits
 def run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
     cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng, up, us, pl, pfn,
+    sp, ss, rng_bits, up, us, pl, pfn,
 ):
     """Advance the rig; returns the next free log row.
 
     Disarmed, the motors are commanded to 0 V and the controller is reset so that it
     starts afresh on arming.
 
-    The entry point Python calls: it keeps numba's reference counting, which releases the
-    ``rng`` it unboxes, and hands over to :func:`_run_steps`, compiled without it
-    (``rig_emulator/_jit.py``).
+    Compiled without reference counting (no allocation here), so the sensors' generator
+    comes as its bit generator ``rng_bits`` (``rng.bit_generator``), not as the Generator.
     """
-    return _run_steps(
-        k_start, n_steps, dt, ctrl_div, log_div,
-        x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
-        cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-        sp, ss, rng, up, us, pl, pfn,
-    )
-
-
-@jit(nrt=False)
-def _run_steps(
-    k_start, n_steps, dt, ctrl_div, log_div,
-    x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,
-    cstate, gstate, reached_t, ref, cout, scratch, work, R, log, log_row, armed,
-    sp, ss, rng, up, us, pl, pfn,
-):
-    """The step loop of :func:`run_steps` (no reference counting: no allocation here)."""
+    rng = generator(rng_bits)
     ctrl_dt = dt * ctrl_div
     phi = 0.0
     theta = 0.0
@@ -146,7 +134,8 @@ def _run_steps(
                         ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                         ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
                     )
-                elif pl.mode != P_EXTERNAL:  # a controller plug-in (issue 16); P_EXTERNAL: v_cmd set from outside
+                elif pfn is not None:  # a controller plug-in (issue 16); without one (P_EXTERNAL: v_cmd set from outside)
+                    # pfn is None, and numba drops this branch and never compiles the plug-in path (issue 14)
                     if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                                           ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
                         armed = False  # the plug-in failed: motors off from the next step (pl.status says why)

@@ -177,7 +177,7 @@ class Simulation:
             self.x, self.v_cmd, self.pp, self.cp, self.gp, d.wind, d.gusts, d.shocks, d.extra,
             self.cstate, self.gstate, self.reached_t, self.ref, self.cout, self.scratch, self.work, self.R,
             self.log, self.log_row, bool(self._armed),
-            self.sensing.params, self.sensing.state, self.sensing.run_rng, self.up, self.us,
+            self.sensing.params, self.sensing.state, self.sensing.run_rng.bit_generator, self.up, self.us,
             self.plugin.params, self.plugin.fn,
         )
         key = tuple(id(a) for a in args[5:] if not isinstance(a, (int, float, bool)))

@@ -39,7 +39,7 @@ def _loop_with_branches(p, out, n):
 
 def test_nrt_false_compiles_without_reference_counting():
     counted = jit(cache=False)(_loop_with_branches)
-    plain = jit(nrt=False, cache=False)(_loop_with_branches)
+    plain = jit(nrt=False, cache=False, python=True)(_loop_with_branches)
     p = Pair(np.arange(3.0), np.arange(3.0) + 10.0)
     for f in (counted, plain):
         out = np.zeros(1)
@@ -48,6 +48,16 @@ def test_nrt_false_compiles_without_reference_counting():
     assert "NRT_incref" in counted.inspect_llvm(counted.signatures[0])
     ir = plain.inspect_llvm(plain.signatures[0])
     assert "NRT_incref" not in ir and "NRT_decref" not in ir
+
+
+def test_a_loop_only_function_called_from_python_runs_its_twin():
+    # nrt=False: no CPython wrapper (issue 14, cold compile); a call from Python compiles a twin
+    f = jit(nrt=False, cache=False)(_loop_with_branches)
+    out = np.zeros(1)
+    f(Pair(np.arange(3.0), np.arange(3.0) + 10.0), out, 5)
+    assert out[0] == 22.0
+    assert f.signatures == [] and len(f._python_twin.signatures) == 1
+    assert f.targetoptions["no_cpython_wrapper"] is True
 
 
 def test_nrt_false_refuses_to_allocate():
@@ -62,7 +72,7 @@ def test_nrt_false_refuses_to_allocate():
 # Every compiled function of the step loop that takes arrays and is not inline="always"
 # (inlined ones are compiled as part of their caller).
 STEP_LOOP = (
-    loop._run_steps, loop._log_row,
+    loop.run_steps, loop._log_row,
     integrator.rk4_step, integrator.apply_ground, rigid_body.state_derivative,
     disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
     rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
@@ -84,15 +94,17 @@ def test_step_loop_functions_are_compiled_without_reference_counting(dispatcher)
     assert dispatcher.targetoptions["_nrt"] is False
 
 
-def test_entry_point_keeps_reference_counting_and_releases_the_generator():
-    # an nrt=False function called from Python would keep one reference to the Generator
-    # per call; the entry points Python calls with one keep NRT for that reason
-    assert loop.run_steps.targetoptions["_nrt"] is True
+def test_entry_point_takes_the_bit_generator_and_keeps_no_reference():
+    # an nrt=False function called from Python with a Generator would keep one reference to
+    # it per call: the step loop takes its bit generator (rig_emulator/simulation/rng_bits.py);
+    # sample_imu_modules, called from Python with a Generator, keeps NRT for that reason
     assert imu_module.sample_imu_modules.targetoptions["_nrt"] is True
     sim = Simulation(load_config(scenario="hover", overrides={"sim.duration": 1.0}))
     rng = sim.sensing.run_rng
+    bits = rng.bit_generator
     sim.advance(5)  # compiles or loads the loop
-    before = sys.getrefcount(rng)
+    held = (rng, bits, sim.x, sim.log, sim.pp.hw, sim.sensing.state)  # a Generator, arrays, namedtuples
+    before = [sys.getrefcount(a) for a in held]
     for _ in range(200):
         sim.advance(5)
-    assert sys.getrefcount(rng) == before
+    assert [sys.getrefcount(a) for a in held] == before
