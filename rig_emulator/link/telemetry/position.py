@@ -15,7 +15,7 @@ import numpy as np
 
 from protocol.dialect import mavlink
 from protocol.frames import enu_to_ned, mavlink_euler_from_rwb, mavlink_quaternion_from_rwb, paper_euler_to_mavlink
-from protocol.geodesy import ecef_to_enu_rotation, ecef_to_geodetic, geodetic_to_ecef
+from protocol.geodesy import ecef_to_enu_rotation, ecef_to_geodetic_xyz, geodetic_to_ecef
 from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.telemetry.attitude import thrust_fraction
 
@@ -41,10 +41,12 @@ def _home_frame(home) -> tuple:
 
 
 def enu_to_global(home, enu):
-    """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, the same operations
-    (bit-identical) with ``home``'s frame computed once."""
+    """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, bit-identical: ``home``'s
+    frame computed once, the conversion back to geodetic in scalar math
+    (:func:`protocol.geodesy.ecef_to_geodetic_xyz`)."""
     r, origin = _home_frame(home)
-    return ecef_to_geodetic(origin + np.asarray(enu, dtype=float) @ r)
+    x, y, z = (origin + np.asarray(enu, dtype=float) @ r).tolist()
+    return ecef_to_geodetic_xyz(x, y, z)
 
 
 def _global(snap, ctx, position=None):
