@@ -93,6 +93,29 @@ def ecef_to_geodetic(ecef):
     return _out(np.degrees(lat)), _out(np.degrees(np.arctan2(y, x))), _out(h)
 
 
+def ecef_to_geodetic_xyz(x: float, y: float, z: float) -> tuple[float, float, float]:
+    """:func:`ecef_to_geodetic` of one ECEF point given as three floats, in scalar math: the
+    same operations in the same order, bit-identical (``math`` and numpy call the same libm
+    functions for these; the horizontal distance stays numpy's ``hypot``, which Python's
+    ``math.hypot`` does not always match to the last bit; a test compares the two), about
+    15x faster than numpy on 0-d arrays (the served rig converts positions for several
+    messages a simulated second)."""
+    p = float(np.hypot(x, y))
+    lat = math.atan2(z, p * (1.0 - WGS84_E2))
+    for _ in range(_MAX_ITERATIONS):
+        sin_lat = math.sin(lat)
+        n = WGS84_A_M / math.sqrt(1.0 - WGS84_E2 * sin_lat * sin_lat)
+        new_lat = math.atan2(z + WGS84_E2 * n * sin_lat, p)
+        converged = abs(new_lat - lat) < 1e-15
+        lat = new_lat
+        if converged:
+            break
+    sin_lat, cos_lat = math.sin(lat), math.cos(lat)
+    n = WGS84_A_M / math.sqrt(1.0 - WGS84_E2 * sin_lat * sin_lat)
+    h = p * cos_lat + (z + WGS84_E2 * n * sin_lat) * sin_lat - n
+    return math.degrees(lat), math.degrees(math.atan2(y, x)), h
+
+
 def ecef_to_enu_rotation(lat_deg: float, lon_deg: float) -> np.ndarray:
     """Rotation R_ENU_ECEF at a geodetic point: rows are east, north, up in ECEF."""
     lat, lon = math.radians(lat_deg), math.radians(lon_deg)

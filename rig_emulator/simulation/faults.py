@@ -129,15 +129,15 @@ def fault_status(sim) -> FaultStatus:
     """The :class:`FaultStatus` of a :class:`~rig_emulator.simulation.run.Simulation` now."""
     f = sim.faults
     us = sim.us
-    flags, v = us.flags, us.values
+    flags, v = us.flags.tolist(), us.values  # one conversion for the flags (read per served chunk)
     sensed = sim.sensing.params.simulate
     st = sim.sensing.state.sstate
     tripped = int(flags[SV.F_FAILSAFE])
     return FaultStatus(
-        imu_faults=tuple(int(m) for m in st.imu_fault_mode) if sensed else (),
-        cell_faults=tuple(int(m) for m in st.cell_fault_mode) if sensed else (),
-        motor_faults=tuple(int(m) for m in f.motor_faults),
-        motor_thrust_loss=tuple(float(x) for x in f.motor_loss),
+        imu_faults=tuple(map(int, st.imu_fault_mode.tolist())) if sensed else (),
+        cell_faults=tuple(map(int, st.cell_fault_mode.tolist())) if sensed else (),
+        motor_faults=tuple(map(int, f.motor_faults.tolist())),
+        motor_thrust_loss=tuple(map(float, f.motor_loss.tolist())),
         imu_flagged=tuple(int(flags[SV.F_GYRO + s]) for s in range(3)) if sensed else (0, 0, 0),
         cells_flagged=int(flags[SV.F_CELLS]) if sensed else 0,
         estimate_invalid=int(flags[SV.F_INVALID]) if sensed else 0,

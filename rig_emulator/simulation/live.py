@@ -23,7 +23,7 @@ from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_I
 from rig_emulator._jit import jit
 from rig_emulator.physics import state as S
 from rig_emulator.physics.hardware import motor_thrust, rest_attitude
-from rig_emulator.physics.electrical import supply_current
+from rig_emulator.physics.electrical import SEQUENTIAL_SUM_MAX, supply_current, supply_current_sum
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
@@ -222,14 +222,23 @@ class LiveRig:
         """Advance ``n_steps`` physics steps; returns the log rows recorded meanwhile."""
         if n_steps > self.chunk_steps_max:
             raise ValueError(f"step({n_steps}): at most {self.chunk_steps_max} steps per call")
-        self.sim.log_row = 0
-        self.sim.advance(n_steps)
-        rows = self.sim.log[: self.sim.log_row]
-        if rows.shape[0]:  # the supply's charge and energy, integrated over the recorded rows
-            amps = self._supply_current(rows[:, L.THRUST:L.THRUST + 4], rows[:, L.V_CMD:L.V_CMD + 4])
-            dt_log = self.sim.log_div * self.sim.dt
-            self._charge_c += float(np.sum(amps)) * dt_log
-            self._energy_j += float(np.sum(amps)) * dt_log * self.supply_voltage
+        sim = self.sim
+        sim.log_row = 0
+        sim.advance(n_steps)
+        n_rows = sim.log_row
+        rows = sim.log[:n_rows]
+        if n_rows:  # the supply's charge and energy, integrated over the recorded rows
+            cfg = sim.cfg
+            thrusts, volts = rows[:, L.THRUST:L.THRUST + 4], rows[:, L.V_CMD:L.V_CMD + 4]
+            supply_v = float(cfg["motors.voltage_max"])
+            if n_rows <= SEQUENTIAL_SUM_MAX:  # a chunk's few rows: the same sum without numpy's call overhead
+                amps = supply_current_sum(thrusts.tolist(), volts.tolist(), supply_v, cfg["airframe.km_over_kf"],
+                                          cfg["motors.kv_rpm_per_v"])
+            else:
+                amps = float(np.sum(self._supply_current(thrusts, volts)))
+            dt_log = sim.log_div * sim.dt
+            self._charge_c += amps * dt_log
+            self._energy_j += amps * dt_log * supply_v
         return rows
 
     def warm_up(self) -> float:
@@ -272,12 +281,12 @@ class LiveRig:
                 imu_si=ss.awork.si.copy(),
                 fused=ss.awork.combined.copy(),
                 imu_rejected_mask=int(ss.health[0]),
-                imu_fault_modes=tuple(int(m) for m in st.imu_fault_mode),
+                imu_fault_modes=tuple(map(int, st.imu_fault_mode.tolist())),
                 cell_raw=ss.cell_raw.copy(),
                 cell_grf=(lcp.newton_per_count * (ss.cell_raw - lcp.zero_counts)) / GRAM_FORCE_N,
                 cell_thrust_n=ss.thrust_est.copy(),
                 cell_rejected_mask=int(ss.health[1]),
-                cell_fault_modes=tuple(int(m) for m in st.cell_fault_mode),
+                cell_fault_modes=tuple(map(int, st.cell_fault_mode.tolist())),
             )
         nan3 = (math.nan,) * 3
         return RigSnapshot(

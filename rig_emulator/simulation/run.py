@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import operator
 import time
 from dataclasses import dataclass, field
 
@@ -180,10 +181,13 @@ class Simulation:
             self.sensing.params, self.sensing.state, self.sensing.run_rng.bit_generator, self.up, self.us,
             self.plugin.params, self.plugin.fn,
         )
-        key = tuple(id(a) for a in args[5:] if not isinstance(a, (int, float, bool)))
-        if key != self._entry_key:
+        # the objects the entry point was looked up for (held, so that their ids cannot be reused):
+        # compared by identity in C (map), the scalars between them (log_row, armed) left out
+        objs = args[5:23] + args[25:]
+        prev = self._entry_key
+        if prev is None or not all(map(operator.is_, objs, prev)):
             self._entry = entry_point(run_steps, args)  # compiles or loads the cache the first time
-            self._entry_key = key
+            self._entry_key = objs
         self.log_row = self._entry(*args)
         self.k += n_steps
         if self.plugin.params.status[0] != 0 and self.plugin_failure is None:

@@ -188,3 +188,22 @@ def test_tangent_plane_matches_local_enu_to_global(lat, lon, alt, enu):
     want = geo.local_enu_to_global(home, enu)
     assert abs(got[0] - want[0]) < 1e-11 and abs(got[2] - want[2]) < 1e-6
     assert abs(math.remainder(got[1] - want[1], 360.0)) < 1e-11
+
+
+@settings(max_examples=500)
+@given(homes, offsets)
+def test_scalar_ecef_to_geodetic_is_bit_identical(home, enu):
+    """The served rig's scalar conversion gives exactly numpy's numbers."""
+    ecef = geo.geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m) + np.asarray(enu) @ geo.ecef_to_enu_rotation(
+        home.lat_deg, home.lon_deg)
+    assert geo.ecef_to_geodetic_xyz(*ecef.tolist()) == geo.ecef_to_geodetic(ecef)
+
+
+def test_scalar_ecef_to_geodetic_is_bit_identical_on_many_points():
+    rng = np.random.default_rng(11)
+    for home in (geo.Home(35.7, 51.4, 1200.0), geo.Home(-33.9, 151.2, 10.0), geo.Home(89.9, -179.0, -50.0)):
+        origin = geo.geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m)
+        r = geo.ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
+        for _ in range(3000):
+            ecef = origin + rng.normal(0.0, 10.0 ** float(rng.integers(-2, 5)), 3) @ r
+            assert geo.ecef_to_geodetic_xyz(*ecef.tolist()) == geo.ecef_to_geodetic(ecef)

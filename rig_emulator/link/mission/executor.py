@@ -291,24 +291,30 @@ class MissionExecutor:
             return self._flown.seqs[min(self._nav, self._flown.size - 1)]
         return self.current_seq
 
-    def current_message(self):
-        """MISSION_CURRENT for the present state."""
+    def _current_fields(self) -> tuple:
+        """(seq, total, mission_state, mission_mode) of MISSION_CURRENT now."""
         if not self.items:
             total = UINT16_MAX
         else:
             total = len(self.items) - (1 if self.item0_home else 0)
         in_mode = (self.modes.main, self.modes.sub) == (AUTO, AUTO_MISSION)
         mode = 0 if not self.items else (1 if in_mode else 2)
-        return M.MAVLink_mission_current_message(seq=self.current_seq_now(), total=total,
-                                                 mission_state=self.state, mission_mode=mode)
+        return self.current_seq_now(), total, self.state, mode
+
+    def current_message(self):
+        """MISSION_CURRENT for the present state."""
+        seq, total, state, mode = self._current_fields()
+        return M.MAVLink_mission_current_message(seq=seq, total=total, mission_state=state, mission_mode=mode)
 
     def announce(self) -> None:
-        """Broadcast MISSION_CURRENT when anything it carries changed."""
-        msg = self.current_message()
-        key = (msg.seq, msg.total, msg.mission_state, msg.mission_mode)
+        """Broadcast MISSION_CURRENT when anything it carries changed (checked after every chunk:
+        the message is built only then)."""
+        key = self._current_fields()
         if key != self._announced:
             self._announced = key
-            self.srv.broadcast(msg)
+            seq, total, state, mode = key
+            self.srv.broadcast(M.MAVLink_mission_current_message(seq=seq, total=total, mission_state=state,
+                                                                 mission_mode=mode))
 
 
 def _mission_start(cmd, srv, channel):

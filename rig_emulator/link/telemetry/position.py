@@ -8,13 +8,14 @@ the true position, ten satellites, HDOP/VDOP 1.0.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from protocol.dialect import mavlink
 from protocol.frames import enu_to_ned, mavlink_euler_from_rwb, mavlink_quaternion_from_rwb, paper_euler_to_mavlink
-from protocol.geodesy import local_enu_to_global
+from protocol.geodesy import ecef_to_enu_rotation, ecef_to_geodetic_xyz, geodetic_to_ecef
 from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.telemetry.attitude import thrust_fraction
 
@@ -28,8 +29,28 @@ IGNORE_POS_VEL = (mavlink.POSITION_TARGET_TYPEMASK_X_IGNORE | mavlink.POSITION_T
                   | mavlink.POSITION_TARGET_TYPEMASK_VY_IGNORE | mavlink.POSITION_TARGET_TYPEMASK_VZ_IGNORE)
 
 
+@functools.lru_cache(maxsize=8)
+def _home_frame(home) -> tuple:
+    """``ecef_to_enu_rotation`` and ``geodetic_to_ecef`` of ``home`` (read-only): what
+    :func:`protocol.geodesy.local_enu_to_global` recomputes on every call."""
+    r = ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
+    origin = geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m)
+    r.setflags(write=False)
+    origin.setflags(write=False)
+    return r, origin
+
+
+def enu_to_global(home, enu):
+    """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, bit-identical: ``home``'s
+    frame computed once, the conversion back to geodetic in scalar math
+    (:func:`protocol.geodesy.ecef_to_geodetic_xyz`)."""
+    r, origin = _home_frame(home)
+    x, y, z = (origin + np.asarray(enu, dtype=float) @ r).tolist()
+    return ecef_to_geodetic_xyz(x, y, z)
+
+
 def _global(snap, ctx, position=None):
-    lat, lon, alt = local_enu_to_global(ctx.home, snap.position if position is None else position)
+    lat, lon, alt = enu_to_global(ctx.home, snap.position if position is None else position)
     return float(lat), float(lon), float(alt)
 
 
@@ -85,7 +106,7 @@ def gps_raw_int(snap, ctx):
 def home_position(snap, ctx):
     """Home: the local origin (``--home``) moved by DO_SET_HOME (its height stays on the ground)."""
     enu = ctx.flight.tasks.home if ctx.flight is not None else np.zeros(3)
-    lat, lon, alt = local_enu_to_global(ctx.home, enu)
+    lat, lon, alt = enu_to_global(ctx.home, enu)
     n, e, d = enu_to_ned(enu)
     return mavlink.MAVLink_home_position_message(
         latitude=U.deg_e7(lat), longitude=U.deg_e7(lon), altitude=U.mm(alt),

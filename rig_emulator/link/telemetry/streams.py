@@ -65,10 +65,13 @@ class StreamSchedule:
                 self.next_due[msg_id] = now + offset
             self._start_offsets = {}
         out = []
+        next_due = self.next_due
+        late = now + EPS_S
         for msg_id, interval in self.interval_s.items():
-            if interval <= 0.0 or now + EPS_S < self.next_due[msg_id]:
+            due_at = next_due[msg_id]
+            if late < due_at or interval <= 0.0:
                 continue
             out.append(msg_id)
-            nxt = self.next_due[msg_id] + interval
-            self.next_due[msg_id] = nxt if nxt + EPS_S > now else now + interval
+            nxt = due_at + interval
+            next_due[msg_id] = nxt if nxt + EPS_S > now else now + interval
         return out

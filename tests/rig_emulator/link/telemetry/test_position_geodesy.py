@@ -1,0 +1,15 @@
+"""The position builders' cached-home conversion is protocol.geodesy's, to the last bit."""
+
+import numpy as np
+
+from protocol.geodesy import Home, local_enu_to_global
+from rig_emulator.link.telemetry.position import enu_to_global
+
+
+def test_enu_to_global_is_local_enu_to_global_bit_for_bit():
+    rng = np.random.default_rng(3)
+    for home in (Home(35.7, 51.4, 1200.0), Home(-12.5, 130.8, 30.0)):
+        for _ in range(2000):
+            enu = rng.normal(0.0, 10.0 ** float(rng.integers(-3, 4)), 3)
+            assert enu_to_global(home, enu) == local_enu_to_global(home, enu)
+            assert enu_to_global(home, tuple(enu.tolist())) == local_enu_to_global(home, enu)
