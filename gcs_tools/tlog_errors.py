@@ -1,7 +1,7 @@
 """The paper's mean errors (Eq. 45) from a .tlog of any MAVLink vehicle.
 
 * phi, theta, psi: ATTITUDE (roll, pitch, yaw) against ATTITUDE_TARGET (its quaternion turned
-  into Z-Y-X Euler angles by :func:`protocol.frames.mavlink_euler_from_quaternion`; targets
+  into Z-Y-X Euler angles by :func:`protocol.frames.mavlink_euler_from_quaternions`; targets
   with ATTITUDE_IGNORE set count as missing). Both sides are compared in MAVLink's
   convention. The paper's angles are ``(roll, -pitch, pi/2 - yaw)``
   (:func:`protocol.frames.mavlink_euler_to_paper`), so ``|phi - phi_d|``,
@@ -27,7 +27,7 @@ import numpy as np
 from gcs_tools.errors import OperationError
 from gcs_tools.tlog_read import read_fields
 from protocol.dialect import mavlink as M
-from protocol.frames import mavlink_euler_from_quaternion, ned_to_enu
+from protocol.frames import mavlink_euler_from_quaternions, ned_to_enu
 from protocol.mean_error import COLUMNS, mean_error
 
 POS_IGNORE = (M.POSITION_TARGET_TYPEMASK_X_IGNORE | M.POSITION_TARGET_TYPEMASK_Y_IGNORE
@@ -61,15 +61,8 @@ def attitude_series(arrays) -> dict:
     """t (s), actual (N, 3) and paired target (N, 3) roll/pitch/yaw in MAVLink's convention."""
     a, tg = arrays["ATTITUDE"], arrays["ATTITUDE_TARGET"]
     actual = np.column_stack([a["roll"], a["pitch"], a["yaw"]])
-    target = np.full((tg["time_boot_ms"].size, 3), np.nan)
-    for i in range(target.shape[0]):
-        if int(tg["type_mask"][i]) & ATT_IGNORE:
-            continue
-        q = (tg["q[0]"][i], tg["q[1]"][i], tg["q[2]"][i], tg["q[3]"][i])
-        try:
-            target[i] = mavlink_euler_from_quaternion(q)
-        except ValueError:
-            continue
+    target = mavlink_euler_from_quaternions(np.column_stack([tg[f"q[{k}]"] for k in range(4)]))
+    target[(tg["type_mask"].astype(np.int64) & ATT_IGNORE) != 0] = np.nan
     idx = pair_latest(a["time_boot_ms"], tg["time_boot_ms"])
     return {"t": a["time_boot_ms"] * 1e-3, "actual": actual, "target": _paired(target, idx)}
 

@@ -192,6 +192,25 @@ def mavlink_euler_from_quaternion(q) -> tuple[float, float, float]:
     return _zyx_angles(rotation_from_quaternion(q))
 
 
+def mavlink_euler_from_quaternions(q) -> np.ndarray:
+    """(N, 3) roll, pitch, yaw of N MAVLink attitude quaternions ((N, 4) w, x, y, z), as
+    :func:`mavlink_euler_from_quaternion` row by row (same formulas, in arrays, for a log's
+    thousands of rows); rows without a direction (zero, NaN or infinite) are NaN."""
+    q = np.asarray(q, dtype=float).reshape(-1, 4)
+    n = np.sqrt(np.sum(q * q, axis=1))
+    bad = ~np.isfinite(n) | (n == 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w, x, y, z = (q[:, k] / n for k in range(4))
+        r21 = 2.0 * (y * z + w * x)
+        r22 = 1.0 - 2.0 * (x * x + y * y)
+        r20 = 2.0 * (x * z - w * y)
+        r10 = 2.0 * (x * y + w * z)
+        r00 = 1.0 - 2.0 * (y * y + z * z)
+        out = np.column_stack([np.arctan2(r21, r22), -np.arcsin(np.clip(r20, -1.0, 1.0)), np.arctan2(r10, r00)])
+    out[bad] = np.nan
+    return out
+
+
 #: T_NED_ENU as a unit quaternion (w, x, y, z): a half turn about the axis (1, 1, 0) / sqrt(2).
 _Q_NED_ENU = (0.0, 0.5 ** 0.5, 0.5 ** 0.5, 0.0)
 

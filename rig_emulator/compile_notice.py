@@ -17,7 +17,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 #: cold compile of the step loop on a quiet 2-core machine (benchmarks/compile_profile.py)
-QUIET_COMPILE_S = 80
+QUIET_COMPILE_S = 40
 
 
 def step_loop_cached() -> bool:

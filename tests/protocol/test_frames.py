@@ -233,3 +233,24 @@ def test_mavlink_quaternion_from_quat_wb_level_east():
     q_wb = fr.quaternion_from_rotation(fr.rwb_from_paper_euler(0.0, 0.0, 0.0))
     roll, pitch, yaw = fr.mavlink_euler_from_quaternion(fr.mavlink_quaternion_from_quat_wb(q_wb))
     assert abs(roll) < 1e-12 and abs(pitch) < 1e-12 and abs(yaw - math.pi / 2) < 1e-12
+
+
+@settings(max_examples=200, deadline=None)
+@given(hnp.arrays(np.float64, st.tuples(st.integers(0, 20), st.just(4)),
+                  elements=st.floats(-2.0, 2.0, allow_nan=False)))
+def test_quaternion_rows_to_euler_match_the_scalar_conversion(q):
+    """The log path (arrays) gives the per-message conversion's angles row by row; no direction: NaN."""
+    out = fr.mavlink_euler_from_quaternions(q)
+    assert out.shape == (q.shape[0], 3)
+    for row, got in zip(q, out):
+        try:
+            want = fr.mavlink_euler_from_quaternion(row)
+        except ValueError:
+            assert np.all(np.isnan(got))
+            continue
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
+def test_quaternion_rows_without_direction_are_nan():
+    out = fr.mavlink_euler_from_quaternions([[0, 0, 0, 0], [math.nan, 0, 0, 1], [1, 0, 0, 0]])
+    assert np.all(np.isnan(out[:2])) and np.allclose(out[2], 0.0)
