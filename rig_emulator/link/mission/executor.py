@@ -28,8 +28,11 @@ Starting and stopping (PX4's interface, which MAVSDK and QGroundControl use):
   navigation item after it. Out of range: DENIED (the message form is answered with
   MISSION_CURRENT in both cases, as the protocol asks).
 
-A new mission replaces the old one atomically; if the old one was being flown, the new one
-is flown from its first item at once. Clearing the mission while flying holds position.
+A new mission replaces the old one atomically; if the old one was being flown, or was
+finished and the armed rig holds its end in AUTO.MISSION, the new one is flown from its first
+item at once (PX4's navigator does the same: MissionBase::onMissionUpdate sets the new items
+while the mission mode is active, finished or not). Clearing the mission while flying holds
+position.
 With a ``store`` (:mod:`rig_emulator.link.mission.store`) the new mission (or the cleared
 one) is stored first; when it cannot be, nothing changes and :meth:`MissionExecutor.replace`
 raises :class:`~rig_emulator.link.state.directory.StateWriteError`.
@@ -96,7 +99,8 @@ class MissionExecutor:
         plan = mission_plan(items, self.srv.ctx.home, self.item0_home)
         if persist and self.store is not None:
             self.store.save(items, self.srv.ctx.home)
-        was_active = self.state == ACTIVE
+        was_active = self.state == ACTIVE or (
+            self.state == COMPLETE and self.rig.armed and (self.modes.main, self.modes.sub) == (AUTO, AUTO_MISSION))
         self.items, self.plan = items, plan
         self.current_seq = plan.first_seq if plan.count > plan.first_seq else 0
         if not items:

@@ -115,3 +115,20 @@ def test_start_with_a_last_item_and_the_guided_setpoint(flight):
                                                 0, 0, 0, 0, 0, 0, 0, 0)
     tgt = recv(conn, "POSITION_TARGET_LOCAL_NED", 5, lambda m: abs(m.x - 0.3) < 1e-6)
     assert tgt is not None and abs(tgt.y - 0.2) < 1e-6 and abs(tgt.z + 1.2) < 1e-6
+
+
+def test_an_upload_after_a_finished_mission_flies_in_mission_mode_only(pid_flight):
+    """Finished and holding its end in AUTO.MISSION, the rig flies a new upload from its first
+    item (PX4's navigator does); in AUTO.LOITER the new mission waits for a start."""
+    rig, conn = pid_flight
+    assert MissionClient(conn).upload([_wp(0, 0.0, 0.0, 1.0), _wp(1, 0.5, 0.0, 1.0)]) == M.MAV_MISSION_ACCEPTED
+    assert command(conn, M.MAV_CMD_MISSION_START, 0, 0).result == M.MAV_RESULT_ACCEPTED
+    assert _reached(conn, 1) == [0, 1]
+    assert _until_state(conn, M.MISSION_STATE_COMPLETE).seq == 1
+    assert MissionClient(conn).upload([_wp(0, 0.5, 0.5, 1.2), _wp(1, 0.0, 0.5, 1.2)]) == M.MAV_MISSION_ACCEPTED
+    assert _reached(conn, 1) == [0, 1]
+    assert _until_state(conn, M.MISSION_STATE_COMPLETE).total == 2
+    assert command(conn, M.MAV_CMD_DO_SET_MODE, BASE, 4, 3).result == M.MAV_RESULT_ACCEPTED  # AUTO.LOITER
+    assert MissionClient(conn).upload([_wp(0, 0.0, 0.0, 1.0), _wp(1, 0.5, 0.0, 1.0)]) == M.MAV_MISSION_ACCEPTED
+    assert _until_state(conn, M.MISSION_STATE_NOT_STARTED, 10.0) is not None
+    assert recv(conn, "MISSION_ITEM_REACHED", 1.0) is None
