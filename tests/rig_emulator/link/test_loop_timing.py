@@ -84,10 +84,13 @@ def test_serve_writes_the_timing_log(tmp_path):
     assert log["count"] == len(log["start"]) == 100  # 0.5 s in 5 ms chunks
     assert np.allclose(np.diff(log["sim"]), 0.005)
     assert np.all(log["end"] >= log["start"]) and np.all(np.diff(log["start"]) > 0)
-    # paced: no chunk is computed before its scheduled instant (the pacing never runs ahead)
+    # paced at real time, not as fast as possible: the schedule gives each 5 ms chunk at least 5 ms
+    # of wall time (a re-anchor after an overrun only moves it later) and no chunk is computed
+    # before its scheduled instant. (How close to real time the rig keeps up is the jitter
+    # benchmark's business: a loaded machine delays the first chunks and the loop catches up.)
+    assert np.all(np.diff(log["due"]) >= 0.005 - 1e-9)
     assert np.all(log["start"] >= log["due"] - 1e-6)
-    s = summarize(log)
-    assert 0.5 < s["sim_per_wall"] < 1.5  # paced at real time, not as fast as possible
+    assert log["start"][-1] - log["due"][0] >= 0.495 - 1e-6
 
 
 def test_a_timing_log_in_a_missing_directory_is_refused_before_serving(tmp_path):

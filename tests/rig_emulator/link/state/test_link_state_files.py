@@ -124,10 +124,17 @@ import sys
 from rig_emulator.link.state.directory import StateDir
 d = StateDir(sys.argv[1])
 i = int(sys.argv[2])
+
+
+def write():
+    d.write_json("doc.json", {"format": "t", "version": 1, "n": i, "pad": [i] * 20000, "end": i})
+
+
+write()  # one whole version before the kill can come (a loaded machine may not run the loop at all)
 print("ready", flush=True)
 while True:
     i += 1
-    d.write_json("doc.json", {"format": "t", "version": 1, "n": i, "pad": [i] * 20000, "end": i})
+    write()
 """
 
 
