@@ -44,12 +44,19 @@ def fields_updated(readout) -> int:
 
 def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False):
     """HIL_SENSOR: the IMU modules' ensemble, the magnetometers' and the virtual barometer.
-    ``all_fields`` flags every field (0x1FFF) whatever was sampled, as jMAVSim does."""
+    ``all_fields`` flags every field (0x1FFF) whatever was sampled, as jMAVSim does.
+
+    The accelerometer and gyro saturate at the range of the IMU PX4 makes of them
+    (:data:`~rig_emulator.link.px4_simulator.hil_units.ACCEL_LIMIT_M_S2`, +-16 g, and
+    ``GYRO_LIMIT_RAD_S``, +-2000 deg/s), as a real IMU at full scale: beyond it PX4 would
+    wrap the reading round to the opposite sign. The virtual ground stops a touchdown in one
+    physics step, so a landing at 0.7 m/s reads about -18 g for one 4 ms step."""
     a, g, m = readout.accel, readout.gyro, readout.mag
+    al, gl = H.ACCEL_LIMIT_M_S2, H.GYRO_LIMIT_RAD_S
     return mavlink.MAVLink_hil_sensor_message(
         time_usec=H.step_usec(readout.time_s),
-        xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
-        xgyro=float(g[0]), ygyro=float(g[1]), zgyro=float(g[2]),
+        xacc=H.saturate(float(a[0]), al), yacc=H.saturate(float(a[1]), al), zacc=H.saturate(float(a[2]), al),
+        xgyro=H.saturate(float(g[0]), gl), ygyro=H.saturate(float(g[1]), gl), zgyro=H.saturate(float(g[2]), gl),
         xmag=U.gauss(float(m[0])), ymag=U.gauss(float(m[1])), zmag=U.gauss(float(m[2])),
         abs_pressure=H.hpa(readout.pressure_pa), diff_pressure=0.0,
         pressure_alt=float(readout.baro_altitude_m), temperature=float(readout.temperature_c),
