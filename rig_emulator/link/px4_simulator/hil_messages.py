@@ -42,16 +42,34 @@ def fields_updated(readout) -> int:
     return bits
 
 
-def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False):
+#: HIL_SENSOR.abs_pressure alternates by this much about the ideal (ISA) pressure, one sign
+#: per step (about 1 mm of altitude). Reading: the virtual barometer has no noise, and PX4
+#: flags a barometer whose reading repeats exactly 100 times in a row as failed (its
+#: DataValidator's STALE check, 0.4 s at 250 Hz); seen with PX4 SITL in a steady hover:
+#: "BARO #0 failed: STALE!" and a switch to the second barometer, which failed alike.
+#: ``pressure_alt`` (which PX4 does not read) stays the ideal altitude.
+BARO_DITHER_PA = 0.01
+
+
+def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False, pressure_dither_pa: float = 0.0):
     """HIL_SENSOR: the IMU modules' ensemble, the magnetometers' and the virtual barometer.
-    ``all_fields`` flags every field (0x1FFF) whatever was sampled, as jMAVSim does."""
+    ``all_fields`` flags every field (0x1FFF) whatever was sampled, as jMAVSim does.
+
+    The accelerometer and gyro saturate at the range of the IMU PX4 makes of them
+    (:data:`~rig_emulator.link.px4_simulator.hil_units.ACCEL_LIMIT_M_S2`, +-16 g, and
+    ``GYRO_LIMIT_RAD_S``, +-2000 deg/s), as a real IMU at full scale: beyond it PX4 would
+    wrap the reading round to the opposite sign. The virtual ground stops a touchdown in one
+    physics step, so a landing at 0.7 m/s reads about -18 g for one 4 ms step.
+    ``pressure_dither_pa`` is added to ``abs_pressure`` (the session alternates its sign:
+    :data:`BARO_DITHER_PA`)."""
     a, g, m = readout.accel, readout.gyro, readout.mag
+    al, gl = H.ACCEL_LIMIT_M_S2, H.GYRO_LIMIT_RAD_S
     return mavlink.MAVLink_hil_sensor_message(
         time_usec=H.step_usec(readout.time_s),
-        xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
-        xgyro=float(g[0]), ygyro=float(g[1]), zgyro=float(g[2]),
+        xacc=H.saturate(float(a[0]), al), yacc=H.saturate(float(a[1]), al), zacc=H.saturate(float(a[2]), al),
+        xgyro=H.saturate(float(g[0]), gl), ygyro=H.saturate(float(g[1]), gl), zgyro=H.saturate(float(g[2]), gl),
         xmag=U.gauss(float(m[0])), ymag=U.gauss(float(m[1])), zmag=U.gauss(float(m[2])),
-        abs_pressure=H.hpa(readout.pressure_pa), diff_pressure=0.0,
+        abs_pressure=H.hpa(readout.pressure_pa + pressure_dither_pa), diff_pressure=0.0,
         pressure_alt=float(readout.baro_altitude_m), temperature=float(readout.temperature_c),
         fields_updated=H.FIELDS_ALL if all_fields else fields_updated(readout), id=sensor_id)
 

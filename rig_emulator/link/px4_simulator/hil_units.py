@@ -20,6 +20,15 @@ FIELD_PRESSURE_ALT = 0x800
 FIELD_TEMPERATURE = 0x1000
 FIELDS_BARO = FIELD_ABS_PRESSURE | FIELD_PRESSURE_ALT | FIELD_TEMPERATURE
 FIELDS_ALL = 0x1FFF
+#: The full-scale range of the IMU PX4 makes of HIL_SENSOR id 0 (``simulator_mavlink``: a
+#: simulated FIFO of int16 samples, accelerometer g/2048 per count = +-16 g, gyro
+#: 2000/32768 deg/s per count = +-2000 deg/s). PX4 converts the float to int16 without a
+#: bound, so a reading beyond it wraps round to the opposite sign (a touchdown's -18 g read
+#: as +13 g). The limits are one count inside full scale: PX4 still flags the sample as
+#: clipped (its limit is 0.999 of full scale) and its EKF2 then widens that axis's variance.
+PX4_ONE_G = 9.80665  # CONSTANTS_ONE_G
+ACCEL_LIMIT_M_S2 = 32767.0 * PX4_ONE_G / 2048.0  # 156.90 m/s^2
+GYRO_LIMIT_RAD_S = math.radians(32767.0 * 2000.0 / 32768.0)  # 34.90 rad/s
 #: HIL_ACTUATOR_CONTROLS.mode bits (MAV_MODE_FLAG) and .flags bits (HIL_ACTUATOR_CONTROLS_FLAGS)
 MODE_FLAG_SAFETY_ARMED = 128
 FLAG_LOCKSTEP = 1
@@ -34,6 +43,11 @@ def step_usec(t_s: float) -> int:
 def hpa(pressure_pa: float) -> float:
     """Pascal -> hectopascal (HIL_SENSOR.abs_pressure, diff_pressure)."""
     return pressure_pa / PA_PER_HPA
+
+
+def saturate(value: float, limit: float) -> float:
+    """``value`` clipped to +-``limit``, as a sensor at full scale reads (NaN stays NaN)."""
+    return min(max(value, -limit), limit)
 
 
 def cm_u16(length_m: float) -> int:

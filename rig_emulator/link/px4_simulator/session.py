@@ -155,7 +155,8 @@ class SimulatorSession:
         readout = self.plant.advance()
         self.steps += 1
         self.counters.steps += self.plant.steps_per_update
-        out = [self._pack(hil_messages.hil_sensor(readout, all_fields=self.all_fields))]
+        dither = hil_messages.BARO_DITHER_PA if self.steps % 2 else -hil_messages.BARO_DITHER_PA
+        out = [self._pack(hil_messages.hil_sensor(readout, all_fields=self.all_fields, pressure_dither_pa=dither))]
         if self.steps % self.gps_div == 0:
             out.append(self._pack(hil_messages.hil_gps(readout, self.plane)))
         if self._state_due(readout.time_s):

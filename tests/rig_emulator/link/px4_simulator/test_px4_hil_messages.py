@@ -118,3 +118,38 @@ def test_lockstep_rate_must_divide_the_physics_rate(rate):
     with pytest.raises(ConfigError, match="--px4-rate"):
         LockstepPlant(rig, rate, 1200.0)
     assert LockstepPlant(rig, 250.0, 1200.0).steps_per_update == 4
+
+
+def _px4_fifo_counts(value: float, scale: float) -> int:
+    """What PX4's simulator_mavlink makes of a HIL_SENSOR (id 0) accel/gyro value: float32
+    divided by the FIFO scale, converted to int16 (truncation; beyond int16 it would wrap)."""
+    counts = int(np.float32(value) / np.float32(scale))  # C's float -> integer truncates
+    return counts
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_hil_sensor_saturates_at_the_range_px4_simulates(sign):
+    """Seen with PX4 SITL (main, 2025-03): a touchdown at 0.7 m/s on the virtual ground stops
+    the virtual vehicle within one step, about -185 m/s^2 on z; PX4's simulated IMU (int16
+    FIFO, g/2048 per count = +-16 g) read it as +129 m/s^2 (wrapped round), its EKF2 took a
+    downward kick and went 3 m below the ground. The message now saturates at full scale,
+    as a real IMU does, and PX4 flags the sample clipped."""
+    accel_scale = hil_units.PX4_ONE_G / 2048.0
+    gyro_scale = math.radians(2000.0 / 32768.0)
+    r = _readout(accel=np.array([0.3, sign * 200.0, sign * -185.0]), gyro=np.array([sign * 40.0, 0.02, -0.01]))
+    m = _roundtrip(hil_messages.hil_sensor(r))
+    assert m.xacc == pytest.approx(0.3, abs=1e-6) and m.ygyro == pytest.approx(0.02, abs=1e-7)  # in range: as is
+    for value, scale in ((m.yacc, accel_scale), (m.zacc, accel_scale), (m.xgyro, gyro_scale)):
+        counts = _px4_fifo_counts(value, scale)
+        assert -32768 <= counts <= 32767  # no wrap round in PX4
+        assert abs(counts) >= 32767 * 0.999  # PX4's clip limit: the sample is flagged as clipped
+    assert math.copysign(1.0, m.zacc) == -sign and math.copysign(1.0, m.yacc) == sign  # the sign is kept
+    assert m.zacc == pytest.approx(-sign * hil_units.ACCEL_LIMIT_M_S2, rel=1e-6)
+    assert m.xgyro == pytest.approx(sign * hil_units.GYRO_LIMIT_RAD_S, rel=1e-6)
+    assert abs(_px4_fifo_counts(m.zacc, accel_scale)) <= 32767 and hil_units.ACCEL_LIMIT_M_S2 / hil_units.PX4_ONE_G > 15.99
+
+
+def test_hil_sensor_keeps_nan_and_in_range_values():
+    r = _readout(accel=np.array([np.nan, 156.0, -156.0]))
+    m = hil_messages.hil_sensor(r)
+    assert math.isnan(m.xacc) and m.yacc == 156.0 and m.zacc == -156.0

@@ -184,3 +184,32 @@ def test_without_the_lockstep_flag_the_rig_runs_in_real_time(served):
     assert 0.02 < dt_sim <= dt_wall + 0.01  # steps without messages, never faster than the wall clock
     assert plant.v == pytest.approx([3.0] * 4)  # 0.2 as float32, x 15 V
     sock.close()
+
+
+def test_a_steady_barometer_never_repeats_exactly(served):
+    """Seen with PX4 SITL (main, 2025-03): in a steady hover the ideal barometer repeated the
+    same pressure, and PX4's DataValidator flags a reading equal (within 1e-6, in Pa as
+    float32) to the previous one 100 times in a row as STALE ("BARO #0 failed: STALE!", then
+    the second barometer alike). The rig alternates abs_pressure by +-0.01 Pa per step."""
+    server, plant, port = served
+    sock, mav = _raw(port)
+    assert _read_until(sock, mav, "HIL_SENSOR") is not None
+    for _ in range(150):  # lockstep on the ground, motors off: the ideal pressure is constant
+        sock.sendall(common.MAVLink_hil_actuator_controls_message(0, [0.0] * 16, 1, 1).pack(mav))
+    pressures, alts = [], []
+    deadline = time.monotonic() + 5
+    while len(pressures) < 140 and time.monotonic() < deadline:
+        for m in mav.parse_buffer(sock.recv(65536)) or ():
+            if m.get_type() == "HIL_SENSOR":
+                pressures.append(m.abs_pressure)
+                alts.append(m.pressure_alt)
+    assert len(pressures) >= 140
+    equal_run = longest = 0
+    for prev, cur in zip(pressures, pressures[1:]):  # PX4: pressure in Pa (float32), |a - b| < 1e-6
+        same = abs(np.float32(np.float32(prev) * np.float32(100.0)) - np.float32(np.float32(cur) * np.float32(100.0))) < 1e-6
+        equal_run = equal_run + 1 if same else 0
+        longest = max(longest, equal_run)
+    assert longest < 100
+    assert max(pressures) - min(pressures) < 0.0005  # hPa: +-0.01 Pa about the ideal (about 1 mm)
+    assert len(set(alts)) == 1  # pressure_alt stays the ideal altitude
+    sock.close()
