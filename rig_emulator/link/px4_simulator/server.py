@@ -85,6 +85,11 @@ class Px4SimulatorServer:
                 self._service_ground(now)
             s = self.session
             if s is not None:
+                # what the flight stack sent first: an answer that has arrived starts lockstep before
+                # a late free-run step would (the loop may wake late on a busy machine)
+                if s.free_run_due(now) and select.select([s.conn], [], [], 0)[0] and not s.on_readable():
+                    self._end_session()
+                    continue
                 for _ in range(s.free_run_due(now)):
                     s.step()
                 if not s.conn.open:
