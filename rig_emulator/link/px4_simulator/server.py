@@ -87,10 +87,14 @@ class Px4SimulatorServer:
             if s is not None:
                 # what the flight stack sent first: an answer that has arrived starts lockstep before
                 # a late free-run step would (the loop may wake late on a busy machine)
-                if s.free_run_due(now) and select.select([s.conn], [], [], 0)[0] and not s.on_readable():
-                    self._end_session()
-                    continue
-                for _ in range(s.free_run_due(now)):
+                due = s.free_run_due(now)  # once: it re-anchors the free run after a long stall
+                if due and select.select([s.conn], [], [], 0)[0]:
+                    if not s.on_readable():
+                        self._end_session()
+                        continue
+                    if s.lockstep:
+                        due = 0
+                for _ in range(due):
                     s.step()
                 if not s.conn.open:
                     self._end_session()
