@@ -46,7 +46,10 @@ def serve() -> int:
         step = 1
         sock.sendall(b"".join(m.pack(mav) for m in _messages(step)))
         while True:
-            data = sock.recv(65536)
+            try:
+                data = sock.recv(65536)
+            except ConnectionResetError:  # the client closed with our last step unread
+                break
             if not data:
                 break
             for msg in mav.parse_buffer(data) or ():

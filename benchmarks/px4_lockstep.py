@@ -63,15 +63,16 @@ def px4_lockstep_rig_probe(sim_s: float, warm_up: bool = True) -> dict:
     load = procfs.MachineLoad().start()
     rig = _rig()
     try:
-        cpu0 = procfs.cpu_seconds(rig.pid)
+        cpu0, peer0 = procfs.cpu_seconds(rig.pid), time.process_time()
         log = _fly(rig.url, sim_s)
-        cpu1 = procfs.cpu_seconds(rig.pid)
+        cpu1, peer1 = procfs.cpu_seconds(rig.pid), time.process_time()
     finally:
         rig.stop()
     load.stop()
     figs["rtf"] = log.sim_time_s / log.wall_s
     figs["wall_us_per_step"] = log.wall_s / log.steps * 1e6
     figs["rig_cpu_us_per_step"] = (cpu1 - cpu0) / log.steps * 1e6
+    figs["peer_cpu_us_per_step"] = (peer1 - peer0) / log.steps * 1e6  # this process: the stand-in flight stack
     figs["steps"] = log.steps
     figs.update(load.figures())
     return figs
@@ -82,12 +83,13 @@ def px4_lockstep_rig_probe(sim_s: float, warm_up: bool = True) -> dict:
 def px4_lockstep_reference_probe(sim_s: float) -> dict:
     load = procfs.MachineLoad().start()
     with ServedProcess("benchmarks.px4_echo_simulator", ECHO_PREFIX) as echo:
-        cpu0 = procfs.cpu_seconds(echo.pid)
+        cpu0, peer0 = procfs.cpu_seconds(echo.pid), time.process_time()
         log = _fly(echo.url, sim_s)
-        cpu1 = procfs.cpu_seconds(echo.pid)
+        cpu1, peer1 = procfs.cpu_seconds(echo.pid), time.process_time()
     load.stop()
     figs = {"rtf": log.sim_time_s / log.wall_s, "wall_us_per_step": log.wall_s / log.steps * 1e6,
-            "sim_cpu_us_per_step": (cpu1 - cpu0) / log.steps * 1e6, "steps": log.steps}
+            "sim_cpu_us_per_step": (cpu1 - cpu0) / log.steps * 1e6,
+            "peer_cpu_us_per_step": (peer1 - peer0) / log.steps * 1e6, "steps": log.steps}
     figs.update(load.figures())
     return figs
 
@@ -103,6 +105,8 @@ def px4_lockstep(stats) -> list:
         rig.metric("wall_us_per_step", "wall time per lockstep step (both sides + loopback)", "us"),
         rig.metric("rig_cpu_us_per_step", "rig CPU time per step", "us",
                    note="physics (4 x 1 ms), sensors, estimators, HIL messages, ground link"),
+        rig.metric("peer_cpu_us_per_step", "stand-in flight stack (pymavlink peer) CPU time per step", "us",
+                   note="the other half of every step: the pair takes turns, so rig + peer CPU bounds the rate"),
         ref.metric("rtf", "reference: real-time factor against the answer-only simulator", "x real time"),
         ref.metric("sim_cpu_us_per_step", "reference: simulator CPU time per step", "us"),
         paired_ratio_metric(rig, "rtf", ref, "rtf", "rig / answer-only simulator, real-time factor", "x",

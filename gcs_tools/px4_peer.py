@@ -241,6 +241,10 @@ class StreamLink:
     def send(self, msg) -> None:
         self._send(msg.pack(self.mav))
 
+    def send_together(self, msgs) -> None:
+        """Several messages in one write (they arrive together)."""
+        self._send(b"".join(m.pack(self.mav) for m in msgs))
+
     def messages(self):
         """Decoded messages as they arrive (blocks; ends when the peer closes)."""
         while True:
@@ -255,18 +259,25 @@ class StreamLink:
 
 
 def fly(link: StreamLink, duration_s: float, controller: HoverController | None = None, arm_at_s: float = 0.5,
-        lockstep: bool = True, record: bool = True) -> PeerLog:
-    """Play the flight stack for ``duration_s`` of simulated time; returns what it saw."""
+        lockstep: bool = True, record: bool = True, answer_at_connect: bool = False) -> PeerLog:
+    """Play the flight stack for ``duration_s`` of simulated time; returns what it saw.
+
+    ``answer_at_connect``: a flight stack that is up when it connects sends its first
+    HIL_ACTUATOR_CONTROLS (motors off, time 0) in the same write as its set-up messages, so
+    that lockstep starts at t = 0 with no free run (PX4 answers only once its modules run)."""
     controller = controller or HoverController()
     log = PeerLog()
-    link.send(mavlink.MAVLink_command_long_message(
-        0, 0, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-        mavlink.MAVLINK_MSG_ID_HIL_STATE_QUATERNION, HIL_STATE_QUATERNION_INTERVAL_US, 0, 0, 0, 0, 0))
-    link.send(mavlink.MAVLink_heartbeat_message(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4, 0, 0, 0, 3))
+    flags = FLAG_LOCKSTEP if lockstep else 0
+    setup = [mavlink.MAVLink_command_long_message(
+                 0, 0, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                 mavlink.MAVLINK_MSG_ID_HIL_STATE_QUATERNION, HIL_STATE_QUATERNION_INTERVAL_US, 0, 0, 0, 0, 0),
+             mavlink.MAVLink_heartbeat_message(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4, 0, 0, 0, 3)]
+    if answer_at_connect:
+        setup.append(mavlink.MAVLink_hil_actuator_controls_message(0, [0.0] * 16, MODE_CUSTOM, flags))
+    link.send_together(setup)
     t0 = None
     was_armed = False
     wall0 = time.perf_counter()
-    flags = FLAG_LOCKSTEP if lockstep else 0
     for msg in link.messages():
         kind = msg.get_type()
         if kind == "HIL_STATE_QUATERNION":

@@ -85,7 +85,16 @@ class Px4SimulatorServer:
                 self._service_ground(now)
             s = self.session
             if s is not None:
-                for _ in range(s.free_run_due(now)):
+                # what the flight stack sent first: an answer that has arrived starts lockstep before
+                # a late free-run step would (the loop may wake late on a busy machine)
+                due = s.free_run_due(now)  # once: it re-anchors the free run after a long stall
+                if due and select.select([s.conn], [], [], 0)[0]:
+                    if not s.on_readable():
+                        self._end_session()
+                        continue
+                    if s.lockstep:
+                        due = 0
+                for _ in range(due):
                     s.step()
                 if not s.conn.open:
                     self._end_session()

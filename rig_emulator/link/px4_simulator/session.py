@@ -36,6 +36,7 @@ SYSID = 1  # the simulator's MAVLink identity (PX4's simulator module ignores it
 COMPID = mavlink.MAV_COMP_ID_AUTOPILOT1
 GPS_RATE_HZ = 10.0
 MAX_FREE_RUN_BURST = 10  # steps run at once when the free run falls behind the wall clock
+SILENT_START_S = 1.0  # the free run's start when the flight stack says nothing (s after it connected)
 
 
 class SimulatorSession:
@@ -54,18 +55,21 @@ class SimulatorSession:
         self.mav = mavlink.MAVLink(None, srcSystem=SYSID, srcComponent=COMPID)
         self.mav.robust_parsing = True
         self.gps_div = max(1, int(round(1.0 / (GPS_RATE_HZ * plant.period_s))))
-        self.state_interval_s = 0.0  # 0: every step; < 0: off
-        self._next_state_t = 0.0
+        self.state_interval_us = 0  # HIL_STATE_QUATERNION: 0 every step; < 0 off; else its grid (_state_due)
+        self._period_us = hil_units.step_usec(plant.period_s)
         self.lockstep = False
         self.actuator_messages = 0
         self.steps = 0
         self.peer_heartbeat = None  # (sysid, compid, autopilot) of the flight stack
-        self._wall0 = time.monotonic()
-        self._sim0 = 0.0
         self._voltages = [0.0] * 4
         self._armed = False
         plant.restart()
         plant.command(self._voltages, False)
+        # the free run starts when the flight stack first speaks (PX4 sends SET_MESSAGE_INTERVAL
+        # as soon as it is connected), or SILENT_START_S after it connected if it says nothing
+        self._heard = False
+        self._wall0 = time.monotonic() + SILENT_START_S
+        self._sim0 = 0.0
 
     # --- receiving ----------------------------------------------------------------------------
     def on_readable(self) -> bool:
@@ -75,6 +79,9 @@ class SimulatorSession:
             return False
         if not data:
             return True
+        if not self._heard:  # the free run's clock starts now (before these messages are acted on)
+            self._heard = True
+            self._wall0 = min(self._wall0, time.monotonic())
         self.counters.rx_bytes += len(data)
         try:
             msgs = self.mav.parse_buffer(data) or []
@@ -122,8 +129,10 @@ class SimulatorSession:
                 mavlink.MAVLINK_MSG_ID_HIL_STATE_QUATERNION:
             interval_us = float(msg.param2)
             if math.isfinite(interval_us) and (interval_us in (-1.0, 0.0) or interval_us > 0.0):
-                self.state_interval_s = -1.0 if interval_us == -1.0 else interval_us * 1e-6
-                self._next_state_t = self.plant.time_s
+                if interval_us <= 0.0:
+                    self.state_interval_us = int(interval_us)  # -1 off, 0 every step
+                else:
+                    self.state_interval_us = max(int(round(interval_us)), 1)
                 result = mavlink.MAV_RESULT_ACCEPTED
             else:
                 result = mavlink.MAV_RESULT_DENIED
@@ -159,20 +168,19 @@ class SimulatorSession:
         out = [self._pack(hil_messages.hil_sensor(readout, all_fields=self.all_fields, pressure_dither_pa=dither))]
         if self.steps % self.gps_div == 0:
             out.append(self._pack(hil_messages.hil_gps(readout, self.plane)))
-        if self._state_due(readout.time_s):
+        if self._state_due(hil_units.step_usec(readout.time_s)):
             out.append(self._pack(hil_messages.hil_state_quaternion(readout, self.plane)))
         self._write(out)
 
-    def _state_due(self, t: float) -> bool:
-        interval = self.state_interval_s
-        if interval <= 0.0:
-            return interval == 0.0
-        if t + 1e-9 < self._next_state_t:
-            return False
-        self._next_state_t += interval
-        if self._next_state_t <= t:
-            self._next_state_t = t + interval
-        return True
+    def _state_due(self, t_us: int) -> bool:
+        """Whether the step ending at ``t_us`` sends HIL_STATE_QUATERNION: at an interval, when a
+        multiple of it (simulated time from the session's start) falls in the step ``(t - T, t]``.
+        A grid fixed in simulated time, not anchored where the command arrived (which depends on
+        the wall clock), so that two sessions in lockstep send it at the same steps."""
+        interval = self.state_interval_us
+        if interval <= 0:
+            return interval == 0
+        return t_us // interval > (t_us - self._period_us) // interval
 
     def _pack(self, msg) -> bytes:
         try:

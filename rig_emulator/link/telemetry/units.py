@@ -18,9 +18,14 @@ UINT16_UNKNOWN = 65535
 
 
 def clamp_int(value: float, lo: int, hi: int, unknown: int = 0) -> int:
-    if not math.isfinite(value):
+    """``value`` rounded (half to even), saturated to ``lo..hi``; ``unknown`` for NaN and
+    infinities (``round`` raises on them). Several calls per message at every step: no
+    ``min``/``max`` calls."""
+    try:
+        v = int(round(value))
+    except (ValueError, OverflowError):
         return unknown
-    return int(min(max(round(value), lo), hi))
+    return lo if v < lo else (hi if v > hi else v)
 
 
 def time_boot_ms(t_us: int) -> int:

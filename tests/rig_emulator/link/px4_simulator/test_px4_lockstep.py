@@ -31,7 +31,8 @@ FREE_RUN_SPEEDUP = 0.01
 class Px4Rig:
     """A served rig in px4-simulator mode in a thread of the test process."""
 
-    def __init__(self, spec: str = "127.0.0.1:0", ground: bool = False, airframe: str = "hilms-ideal"):
+    def __init__(self, spec: str = "127.0.0.1:0", ground: bool = False, airframe: str = "hilms-ideal",
+                 speedup: float = FREE_RUN_SPEEDUP):
         cfg = load_config(airframe=airframe, scenario="hover")
         self.rig = prepare_rig(cfg)
         self.ground = RigServer(self.rig, ["tcpin:127.0.0.1:0"] if ground else [], home=HOME, speedup=0.0)
@@ -39,7 +40,7 @@ class Px4Rig:
         self.lines: list[str] = []
         self.plant = LockstepPlant(self.rig, 250.0, HOME.alt_m)
         self.plant.restart()  # compiles (cold cache) before any peer waits on it
-        self.server = Px4SimulatorServer(self.ground, self.transport, self.plant, HOME, speedup=FREE_RUN_SPEEDUP,
+        self.server = Px4SimulatorServer(self.ground, self.transport, self.plant, HOME, speedup=speedup,
                                          log=self.lines.append)
         self.thread = threading.Thread(target=self.server.run, daemon=True)
 
@@ -64,6 +65,18 @@ class Px4Rig:
                 return True
             time.sleep(0.01)
         return False
+
+
+class RecordingLink(StreamLink):
+    """The stand-in's link, keeping every message it received as bytes."""
+
+    received: list
+
+    def messages(self):
+        self.received = []
+        for msg in super().messages():
+            self.received.append(bytes(msg.get_msgbuf()))
+            yield msg
 
 
 def _altitudes(log) -> list[tuple[float, float]]:
@@ -105,6 +118,48 @@ def test_hover_in_lockstep_and_two_sessions_identical():
         # the peer's last answer stepped the plant once more before it hung up
         assert rig.server.session_steps == [a.steps + 1, b.steps + 1]
         assert any("flight stack gone" in line for line in rig.lines)
+
+
+def test_two_sessions_at_the_default_speedup_are_identical_from_the_lockstep_start():
+    """At the default ``--speedup`` (1: the free run at real time), with the ground link served
+    and a ground station reading its streams. The flight stack answers at once (its first
+    HIL_ACTUATOR_CONTROLS in the write that connects it), so both sessions start lockstep at
+    t = 0 however busy the machine is; from there nothing paced by the wall clock may reach
+    the streams: sensors, GPS and ground truth (whose 5 ms schedule is a grid in simulated
+    time, not anchored where SET_MESSAGE_INTERVAL happened to arrive) are the same bit for bit."""
+    with Px4Rig(ground=True, speedup=1.0) as rig:
+        gcs = connect(rig.ground.urls[0])
+        stop = threading.Event()
+        got = []
+
+        def drain():  # a ground station taking the rig's streams, so the ground link has work between steps
+            while not stop.is_set():
+                m = gcs.recv_match(blocking=True, timeout=0.1)
+                if m is not None:
+                    got.append(m.get_type())
+
+        reader = threading.Thread(target=drain, daemon=True)
+        reader.start()
+        try:
+            logs, streams = [], []
+            for _ in range(2):
+                link = RecordingLink.tcp("127.0.0.1", rig.port)
+                logs.append(fly(link, 3.0, HoverController(altitude_m=1.0), answer_at_connect=True))
+                link.close()
+                assert rig.wait_sessions_ended(len(logs))
+                streams.append(link.received)
+        finally:
+            stop.set()
+            reader.join(5)
+            gcs.close()
+        assert [line for line in rig.lines if "lockstep from" in line] == ["flight stack in lockstep from t = 0.000 s"] * 2
+        a, b = logs
+        assert a.sensors[0][0] == 4000 and a.steps >= 750 and a.truth
+        assert max(row[5] for row in a.truth) - a.truth[0][5] > 500  # it flew (climbed over 0.5 m)
+        assert a.sensors == b.sensors and a.truth == b.truth and a.gps == b.gps
+        # every message the rig sent, byte for byte (sequence numbers and the COMMAND_ACK included)
+        assert len(streams[0]) > 1000 and streams[0] == streams[1]
+        assert "HILMS_LOAD_CELLS" in got
 
 
 def test_the_stand_in_holds_hover_on_the_hardware_rig():

@@ -213,3 +213,34 @@ def test_a_steady_barometer_never_repeats_exactly(served):
     assert max(pressures) - min(pressures) < 0.0005  # hPa: +-0.01 Pa about the ideal (about 1 mm)
     assert len(set(alts)) == 1  # pressure_alt stays the ideal altitude
     sock.close()
+
+
+def test_ground_truth_schedule_is_a_grid_in_simulated_time(served):
+    """HIL_STATE_QUATERNION at the 5 ms PX4 asks goes with the steps whose span ``(t - 4 ms, t]``
+    holds a multiple of 5 ms, wherever in the free run (paced by the wall clock)
+    SET_MESSAGE_INTERVAL arrived: sessions in lockstep send it at the same steps. (It was
+    anchored where the command arrived: two sessions that started lockstep at the same step
+    differed in which steps carried it.)"""
+    server, plant, port = served
+    sock, mav = _raw(port)
+    sock.sendall(common.MAVLink_heartbeat_message(common.MAV_TYPE_QUADROTOR, common.MAV_AUTOPILOT_PX4, 0, 0, 0,
+                                                  3).pack(mav))  # the free run starts
+    while _read_until(sock, mav, "HIL_SENSOR").time_usec < 12000:  # a few free-run steps go by
+        pass
+    sock.sendall(common.MAVLink_command_long_message(0, 0, common.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                                     common.MAVLINK_MSG_ID_HIL_STATE_QUATERNION, 5000, 0, 0, 0, 0,
+                                                     0).pack(mav)
+                 + common.MAVLink_hil_actuator_controls_message(0, [0.0] * 16, 1, 1).pack(mav))
+    sensors, states = [], []
+    deadline = time.monotonic() + 10
+    while len(sensors) < 60 and time.monotonic() < deadline:
+        for m in mav.parse_buffer(sock.recv(65536)) or ():
+            if m.get_type() == "HIL_SENSOR":
+                sensors.append(m.time_usec)
+                sock.sendall(common.MAVLink_hil_actuator_controls_message(0, [0.0] * 16, 1, 1).pack(mav))
+            elif m.get_type() == "HIL_STATE_QUATERNION":
+                states.append(m.time_usec)
+    sock.close()
+    window = sensors[-40:]  # well after the command: in lockstep
+    assert len(window) == 40 and all(t1 - t0 == 4000 for t0, t1 in zip(window, window[1:]))
+    assert [t for t in states if t >= window[0]] == [t for t in window if t // 5000 > (t - 4000) // 5000]
