@@ -117,17 +117,23 @@ def main(argv=None) -> int:
                          "'cpu' (the thread's CPU time over the same span, the run module's timer replaced in the "
                          "probe: on a shared machine the figure the other processes disturb least; default "
                          "%(default)s)")
+    ap.add_argument("--also", action="append", default=[], metavar="COMMIT",
+                    help="another commit measured in the same alternation and reported against --base like --this "
+                         "(repeatable; e.g. a step between the two)")
     ap.add_argument("--out", help="write the raw runs as JSON")
     args = ap.parse_args(argv)
     airframes = args.airframes or ["ideal"]
     strategies = args.strategies.split(",")
     repo = Path(__file__).resolve().parent.parent
-    runs = {"base": [], "this": []}
+    commits = {"base": args.base, "this": args.this}
+    commits.update({f"also-{c}": c for c in args.also})
+    names = list(commits)
+    runs = {n: [] for n in names}
     with tempfile.TemporaryDirectory(prefix="hilms-ab-") as tmp:
         tmp = Path(tmp)
-        trees = {"base": _export(args.base, repo, tmp / "base"), "this": _export(args.this, repo, tmp / "this")}
+        trees = {n: _export(c, repo, tmp / n) for n, c in commits.items()}
         for rep in range(args.repeat):
-            for name in (("base", "this") if rep % 2 == 0 else ("this", "base")):
+            for name in (names if rep % 2 == 0 else names[::-1]):
                 r = _run(trees[name], tmp / f"cache-{name}", args.duration, strategies, airframes, args.calls,
                          args.clock)
                 runs[name].append(r)
@@ -135,31 +141,35 @@ def main(argv=None) -> int:
                       file=sys.stderr, flush=True)
     with open("/proc/loadavg") if os.path.exists("/proc/loadavg") else open(os.devnull) as f:
         load = f.read().strip()
-    print(f"A/B: {args.this} vs {args.base}, {args.repeat} repetitions, {args.calls} calls of {args.duration:g} s, "
+    for name in names[1:]:
+        _report(runs[name], runs["base"], commits[name], args, airframes, strategies, load)
+    if args.out:
+        Path(args.out).write_text(json.dumps(runs, indent=1))
+    return 0
+
+
+def _report(this, base, commit, args, airframes, strategies, load) -> None:
+    print(f"A/B: {commit} vs {args.base}, {args.repeat} repetitions, {args.calls} calls of {args.duration:g} s, "
           f"airframes {', '.join(airframes)}, clock {args.clock}, load average {load}")
-    cold = runs["this"][0]["first_call_s"] / runs["base"][0]["first_call_s"]
-    print(f"cold compile + first call: {runs['this'][0]['first_call_s']:.1f} s vs {runs['base'][0]['first_call_s']:.1f} s"
+    cold = this[0]["first_call_s"] / base[0]["first_call_s"]
+    print(f"cold compile + first call: {this[0]['first_call_s']:.1f} s vs {base[0]['first_call_s']:.1f} s"
           f" (ratio {cold:.3f}; target <= 1.10)")
     if args.repeat > 1:
-        warm = [t["first_call_s"] / b["first_call_s"] for t, b in zip(runs["this"][1:], runs["base"][1:])]
+        warm = [t["first_call_s"] / b["first_call_s"] for t, b in zip(this[1:], base[1:])]
         print(f"warm start (cache load) ratio: median {statistics.median(warm):.3f}")
     for a in airframes:
         for s in strategies:
             key = f"rtf.{a}.{s}"
-            ratios = [t[key] / b[key] for t, b in zip(runs["this"], runs["base"])]
-            tm, bm = statistics.median(t[key] for t in runs["this"]), statistics.median(b[key] for b in runs["base"])
+            ratios = [t[key] / b[key] for t, b in zip(this, base)]
+            tm, bm = statistics.median(t[key] for t in this), statistics.median(b[key] for b in base)
             print(f"{a} {s}: real-time factor {tm:.0f}x vs {bm:.0f}x ({1e3 / tm:.3f} vs {1e3 / bm:.3f} us/step), "
-                  f"ratio median "
-                  f"{statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
+                  f"ratio median {statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
             best = f"best.{a}.{s}"
-            if all(best in r for r in runs["this"] + runs["base"]):
-                bt = max(t[best] for t in runs["this"])
-                bb = max(b[best] for b in runs["base"])
+            if all(best in r for r in this + base):
+                bt = max(t[best] for t in this)
+                bb = max(b[best] for b in base)
                 print(f"{a} {s}: best call of all repetitions {bt:.0f}x vs {bb:.0f}x ({1e3 / bt:.3f} vs "
                       f"{1e3 / bb:.3f} us/step), ratio {bt / bb:.3f}")
-    if args.out:
-        Path(args.out).write_text(json.dumps(runs, indent=1))
-    return 0
 
 
 if __name__ == "__main__":
