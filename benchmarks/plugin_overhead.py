@@ -57,6 +57,10 @@ def airframe(name):  # "ideal": the tree's ideal plant (hilms was ideal before i
         return name
     return "hilms-ideal" if os.path.exists(os.path.join(presets, "hilms-ideal.toml")) else "hilms"
 airframes = sys.argv[3].split(",")
+if sys.argv[5] == "cpu":  # the loop's own CPU time: the run module times it with time.perf_counter
+    import types
+    import rig_emulator.simulation.run as run_module
+    run_module.time = types.SimpleNamespace(perf_counter=time.thread_time)
 simulate("helix", strategy="smc-flc", duration=0.01, seed=0, airframe=airframe(airframes[0]))
 first = time.perf_counter() - t1
 out = {"tree": rig_emulator.__file__, "import_s": t1 - t0, "first_call_s": first}
@@ -85,10 +89,10 @@ def _export(commit: str, repo: Path, dest: Path) -> Path:
     return tree
 
 
-def _run(tree: Path, cache: Path, duration: float, strategies, airframes, calls: int = 3) -> dict:
+def _run(tree: Path, cache: Path, duration: float, strategies, airframes, calls: int = 3, clock: str = "wall") -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree), HILMS_NUMBA_CACHE=str(cache), NUMBA_CACHE_DIR=str(cache))
     p = subprocess.run([sys.executable, "-c", _PROBE, str(duration), ",".join(strategies), ",".join(airframes),
-                        str(calls)],
+                        str(calls), clock],
                        env=env, cwd=tree,
                        capture_output=True, text=True, check=False)
     if p.returncode != 0:
@@ -108,46 +112,64 @@ def main(argv=None) -> int:
     ap.add_argument("--calls", type=int, default=3,
                     help="steady-state calls per airframe and strategy in each process: their median and their "
                          "best (the least disturbed, for a busy machine) are reported (default %(default)s)")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="what times the steady-state calls: 'wall' (SimResult.wall_time_s, as the benchmarks) or "
+                         "'cpu' (the thread's CPU time over the same span, the run module's timer replaced in the "
+                         "probe: on a shared machine the figure the other processes disturb least; default "
+                         "%(default)s)")
+    ap.add_argument("--also", action="append", default=[], metavar="COMMIT",
+                    help="another commit measured in the same alternation and reported against --base like --this "
+                         "(repeatable; e.g. a step between the two)")
     ap.add_argument("--out", help="write the raw runs as JSON")
     args = ap.parse_args(argv)
     airframes = args.airframes or ["ideal"]
     strategies = args.strategies.split(",")
     repo = Path(__file__).resolve().parent.parent
-    runs = {"base": [], "this": []}
+    commits = {"base": args.base, "this": args.this}
+    commits.update({f"also-{c}": c for c in args.also})
+    names = list(commits)
+    runs = {n: [] for n in names}
     with tempfile.TemporaryDirectory(prefix="hilms-ab-") as tmp:
         tmp = Path(tmp)
-        trees = {"base": _export(args.base, repo, tmp / "base"), "this": _export(args.this, repo, tmp / "this")}
+        trees = {n: _export(c, repo, tmp / n) for n, c in commits.items()}
         for rep in range(args.repeat):
-            for name in (("base", "this") if rep % 2 == 0 else ("this", "base")):
-                r = _run(trees[name], tmp / f"cache-{name}", args.duration, strategies, airframes, args.calls)
+            for name in (names if rep % 2 == 0 else names[::-1]):
+                r = _run(trees[name], tmp / f"cache-{name}", args.duration, strategies, airframes, args.calls,
+                         args.clock)
                 runs[name].append(r)
                 print(f"rep {rep + 1} {name}: " + ", ".join(f"{k} {v:.3g}" for k, v in r.items() if k != "tree"),
                       file=sys.stderr, flush=True)
     with open("/proc/loadavg") if os.path.exists("/proc/loadavg") else open(os.devnull) as f:
         load = f.read().strip()
-    print(f"A/B: {args.this} vs {args.base}, {args.repeat} repetitions, airframes {', '.join(airframes)}, "
-          f"load average {load}")
-    cold = runs["this"][0]["first_call_s"] / runs["base"][0]["first_call_s"]
-    print(f"cold compile + first call: {runs['this'][0]['first_call_s']:.1f} s vs {runs['base'][0]['first_call_s']:.1f} s"
+    for name in names[1:]:
+        _report(runs[name], runs["base"], commits[name], args, airframes, strategies, load)
+    if args.out:
+        Path(args.out).write_text(json.dumps(runs, indent=1))
+    return 0
+
+
+def _report(this, base, commit, args, airframes, strategies, load) -> None:
+    print(f"A/B: {commit} vs {args.base}, {args.repeat} repetitions, {args.calls} calls of {args.duration:g} s, "
+          f"airframes {', '.join(airframes)}, clock {args.clock}, load average {load}")
+    cold = this[0]["first_call_s"] / base[0]["first_call_s"]
+    print(f"cold compile + first call: {this[0]['first_call_s']:.1f} s vs {base[0]['first_call_s']:.1f} s"
           f" (ratio {cold:.3f}; target <= 1.10)")
     if args.repeat > 1:
-        warm = [t["first_call_s"] / b["first_call_s"] for t, b in zip(runs["this"][1:], runs["base"][1:])]
+        warm = [t["first_call_s"] / b["first_call_s"] for t, b in zip(this[1:], base[1:])]
         print(f"warm start (cache load) ratio: median {statistics.median(warm):.3f}")
     for a in airframes:
         for s in strategies:
             key = f"rtf.{a}.{s}"
-            ratios = [t[key] / b[key] for t, b in zip(runs["this"], runs["base"])]
-            print(f"{a} {s}: real-time factor {statistics.median(t[key] for t in runs['this']):.0f}x vs "
-                  f"{statistics.median(b[key] for b in runs['base']):.0f}x, ratio median "
-                  f"{statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
+            ratios = [t[key] / b[key] for t, b in zip(this, base)]
+            tm, bm = statistics.median(t[key] for t in this), statistics.median(b[key] for b in base)
+            print(f"{a} {s}: real-time factor {tm:.0f}x vs {bm:.0f}x ({1e3 / tm:.3f} vs {1e3 / bm:.3f} us/step), "
+                  f"ratio median {statistics.median(ratios):.3f} (min {min(ratios):.3f}, max {max(ratios):.3f})")
             best = f"best.{a}.{s}"
-            if all(best in r for r in runs["this"] + runs["base"]):
-                bt = max(t[best] for t in runs["this"])
-                bb = max(b[best] for b in runs["base"])
-                print(f"{a} {s}: best call of all repetitions {bt:.0f}x vs {bb:.0f}x, ratio {bt / bb:.3f}")
-    if args.out:
-        Path(args.out).write_text(json.dumps(runs, indent=1))
-    return 0
+            if all(best in r for r in this + base):
+                bt = max(t[best] for t in this)
+                bb = max(b[best] for b in base)
+                print(f"{a} {s}: best call of all repetitions {bt:.0f}x vs {bb:.0f}x ({1e3 / bt:.3f} vs "
+                      f"{1e3 / bb:.3f} us/step), ratio {bt / bb:.3f}")
 
 
 if __name__ == "__main__":

@@ -6,32 +6,45 @@ from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import quat_normalize
 
 
-@jit(nrt=False)
+@jit(inline="always")  # one call site (the step loop): see the note below
 def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     """Advance ``x`` in place by one RK4 step of length ``h``.
 
     ``work`` is a (5, 17) scratch array (k1..k4 and the stage state): no allocation.
     With a zero motor time constant the motors follow their command at once.
+
+    Speed: this and :func:`state_derivative` are inlined into the step loop, the four stages
+    through one call site. A call of a compiled function passes every field of every array
+    and namedtuple argument one by one (numba flattens them), and ``p`` with its hardware
+    parameters is some 130 values: as calls, the five per step cost the ideal plant about a
+    fifth of its step (benchmarks/README.md, hardware-rig). The stage state of k1 is a copy
+    of ``x`` (the same values), so the arithmetic is that of the four separate calls.
     """
     n = x.shape[0]
     if p.tau_motor <= 0.0:
         for i in range(4):
             x[13 + i] = v_cmd[i]
+    xs = work[4]
+    for stage in range(4):
+        if stage == 0:
+            ts = t
+            for i in range(n):
+                xs[i] = x[i]
+        elif stage == 3:
+            ts = t + h
+            k3 = work[2]
+            for i in range(n):
+                xs[i] = x[i] + h * k3[i]
+        else:
+            ts = t + 0.5 * h
+            kp = work[stage - 1]
+            for i in range(n):
+                xs[i] = x[i] + 0.5 * h * kp[i]
+        state_derivative(ts, xs, v_cmd, p, wind, gusts, shocks, extra, R, work[stage])
     k1 = work[0]
     k2 = work[1]
     k3 = work[2]
     k4 = work[3]
-    xs = work[4]
-    state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, k1)
-    for i in range(n):
-        xs[i] = x[i] + 0.5 * h * k1[i]
-    state_derivative(t + 0.5 * h, xs, v_cmd, p, wind, gusts, shocks, extra, R, k2)
-    for i in range(n):
-        xs[i] = x[i] + 0.5 * h * k2[i]
-    state_derivative(t + 0.5 * h, xs, v_cmd, p, wind, gusts, shocks, extra, R, k3)
-    for i in range(n):
-        xs[i] = x[i] + h * k3[i]
-    state_derivative(t + h, xs, v_cmd, p, wind, gusts, shocks, extra, R, k4)
     sixth = h / 6.0
     for i in range(n):
         x[i] += sixth * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])

@@ -63,7 +63,9 @@ def allocate_raw(suite: SensorSuite) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros((suite.imu.n_modules, 9)), np.zeros(suite.cells.n_cells)
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+# inlined into the step loop's _sense (its one call site there): a call passes suite and state field by
+# field every step (simulation/loop.py)
+@jit(inline="always")
 def sensors_step(step_index, q, omega_B, omega_dot_B, thrust_N, rotor_speed_rad_s, suite, state, rng,
                  imu_raw_out, cell_raw_out):
     """Sample whatever is due at ``step_index``; returns the bit mask of fresh sensors."""

@@ -71,9 +71,12 @@ def test_nrt_false_refuses_to_allocate():
 
 # Every compiled function of the step loop that takes arrays and is not inline="always"
 # (inlined ones are compiled as part of their caller).
+INLINED = (integrator.rk4_step, rigid_body.state_derivative, loop._sense, sensor_step.sensors_step)
 STEP_LOOP = (
     loop.run_steps, loop._log_row,
-    integrator.rk4_step, integrator.apply_ground, rigid_body.state_derivative,
+    # rk4_step, state_derivative, loop._sense and sensor_step.sensors_step are inline="always" (one call
+    # site each: a call passed their namedtuples field by field every step, benchmarks/README.md)
+    integrator.apply_ground,
     disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
     rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
     controller.control_update,
@@ -81,7 +84,7 @@ STEP_LOOP = (
     trajectories.helix_eq46, trajectories.harmonic_attitude, waypoint_switching.line_setpoint,
     imu_module._sample_imu_modules, supervisor.supervise,
     # called, not inlined (the cold compile, issue 14)
-    loop._sense, sensor_step.sensors_step, attitude_pipeline.attitude_estimation_step,
+    attitude_pipeline.attitude_estimation_step,
     load_cell_filter.load_cell_filter_step, onboard_position.onboard_translation_step, smc.smc_attitude,
     fuzzy.flc_eval, fuzzy.flc_axis, allocation.allocate, pid.pid_axis, complementary.complementary_step,
     ensemble.ensemble_step, ensemble.ensemble_vectors, imu_calibration.apply_imu_calibration,
@@ -92,6 +95,12 @@ STEP_LOOP = (
 @pytest.mark.parametrize("dispatcher", STEP_LOOP, ids=lambda d: d.py_func.__qualname__)
 def test_step_loop_functions_are_compiled_without_reference_counting(dispatcher):
     assert dispatcher.targetoptions["_nrt"] is False
+
+
+@pytest.mark.parametrize("dispatcher", INLINED, ids=lambda d: d.py_func.__qualname__)
+def test_the_inlined_step_loop_functions_are_inlined(dispatcher):
+    # they take the reference-counting flag of the function they are inlined into
+    assert dispatcher.targetoptions["inline"] == "always"
 
 
 def test_entry_point_takes_the_bit_generator_and_keeps_no_reference():
