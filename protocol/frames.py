@@ -60,17 +60,17 @@ def wrap_pi(angle):
 
 
 def _rx(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = math.cos(a), math.sin(a)  # libm's, as np.cos/np.sin of one float (tests/protocol/test_frames_scalar.py)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def _ry(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = math.cos(a), math.sin(a)  # libm's, as np.cos/np.sin of one float (tests/protocol/test_frames_scalar.py)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def _rz(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = math.cos(a), math.sin(a)  # libm's, as np.cos/np.sin of one float (tests/protocol/test_frames_scalar.py)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 

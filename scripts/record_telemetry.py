@@ -9,9 +9,10 @@ at speed-up 0 in the serve loop's chunks at ``--speedup max`` (``chunk_seconds(5
 two peers on a recording endpoint (one at the default stream rates, one that asked for every
 stream at 50 Hz with REQUEST_DATA_STREAM ALL), and the loop's own steps called in its order
 (``step_chunk``, ``emit_streams``, ``flush``) chunk after chunk. A scripted flight drives it
-through the commands a ground station sends (arm, take-off, reposition, a sensor fault, a
-shock, a mode change, land), per airframe: ``hilms-ideal`` (what the benchmark serves; no
-sensor models) and ``hilms`` (sensor models, the rig flying on its estimates). The only
+through the commands a ground station sends (arm, take-off, reposition, a
+shock, a sensor fault, STABILIZED (attitude mode: no position target), return, land), per
+configuration: ``hilms-ideal`` (what the benchmark serves), ``hilms`` (the hardware rig) and
+``hilms-ideal`` with ``sensors.simulate = false`` (the ideal sensor readings). The only
 wall-clock inputs of the telemetry are fixed: ``SYSTEM_TIME``'s Unix time (the ``time`` module
 its builder reads is replaced by a fixed clock) and ``SYS_STATUS``'s load (``run`` is not called,
 so it stays 0). HEARTBEAT goes out only on the peers' opening
@@ -41,6 +42,7 @@ from rig_emulator.link.serve import chunk_seconds, prepare_rig  # noqa: E402
 from rig_emulator.link.telemetry import status as status_mod  # noqa: E402
 
 BOOT_UNIX_S = 1.7e9
+PX4_STABILIZED = 7  # PX4's custom main mode STABILIZED
 
 
 class RecordingEndpoint(Endpoint):
@@ -82,9 +84,21 @@ def _command(server, channel, gcs, cmd, *params):
     server.handle(_decode(gcs, msg), channel)
 
 
+def _config(spec: str):
+    """``airframe`` or ``airframe:key=value`` (one override: ``true``/``false`` or a number)."""
+    airframe, _, override = spec.partition(":")
+    overrides = {}
+    if override:
+        key, _, value = override.partition("=")
+        overrides[key] = {"true": True, "false": False}.get(value.lower(), value)
+        if isinstance(overrides[key], str):
+            overrides[key] = float(value)
+    return load_config(airframe=airframe, overrides=overrides or None)
+
+
 def record(airframe: str, sim_s: float, out: list) -> None:
     status_mod.time = types.SimpleNamespace(time=lambda: BOOT_UNIX_S)  # SYSTEM_TIME's wall clock, fixed
-    rig = prepare_rig(load_config(airframe=airframe))
+    rig = prepare_rig(_config(airframe))
     server = srv.RigServer(rig, [], speedup=0.0, chunk_s=chunk_seconds(5.0, 0.0))
     ep = RecordingEndpoint()
     server.endpoints.append(ep)
@@ -104,7 +118,9 @@ def record(airframe: str, sim_s: float, out: list) -> None:
                               home.lat_deg + 2e-5, home.lon_deg + 3e-5, home.alt_m + 4.0),
         320: lambda: _command(server, ch_default, gcs, M.MAV_CMD_HILMS_SHOCK, 2, 0.5, 0.2),
         360: lambda: _command(server, ch_default, gcs, M.MAV_CMD_HILMS_SENSOR_FAULT, 0, 1, 1, 0.05),
-        420: lambda: _command(server, ch_default, gcs, M.MAV_CMD_NAV_RETURN_TO_LAUNCH),
+        400: lambda: _command(server, ch_default, gcs, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                              PX4_STABILIZED),  # attitude mode: no position target
+        440: lambda: _command(server, ch_default, gcs, M.MAV_CMD_NAV_RETURN_TO_LAUNCH),
         520: lambda: _command(server, ch_default, gcs, M.MAV_CMD_NAV_LAND),
     }
     for k in range(n_chunks):
@@ -115,7 +131,7 @@ def record(airframe: str, sim_s: float, out: list) -> None:
         server.flush()
         for key, data in ep.frames:
             msg = gcs.decode(bytearray(data))
-            out.append(f"{airframe} {k} {key[0]} {msg.get_type()} {data.hex()}")
+            out.append(f"{airframe.replace(' ', '')} {k} {key[0]} {msg.get_type()} {data.hex()}")
         ep.frames.clear()
     server.close()
 
@@ -124,7 +140,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out", nargs="?", help="file to write the frames to")
     ap.add_argument("--sim-s", type=float, default=12.0, help="simulated seconds per airframe (default 12)")
-    ap.add_argument("--airframes", default="hilms-ideal,hilms")
+    ap.add_argument("--airframes", default="hilms-ideal,hilms,hilms-ideal:sensors.simulate=false",
+                    help="comma-separated: airframe or airframe:key=value (default: %(default)s)")
     ap.add_argument("--compare", nargs=2, metavar=("A", "B"), help="compare two recordings instead")
     args = ap.parse_args()
     if args.compare:

@@ -61,3 +61,35 @@ def test_paper_yaw_matches_the_array_form():
                                                    -math.pi / 2, 2 * math.pi, 1e-300, math.nan]
     for psi in values:
         assert _bits([F.paper_yaw_to_mavlink_xyz(float(psi))]) == _bits([F.paper_euler_to_mavlink(0.0, 0.0, psi)[2]]), psi
+
+
+def test_libm_functions_are_numpys():
+    """The scalar forms call math's atan2, asin, sqrt, cos and sin where the array forms call numpy's."""
+    rng = np.random.default_rng(16)
+    for x, y in zip(rng.normal(size=20000) * 3.0, rng.normal(size=20000)):
+        x, y = float(x), float(y)
+        c = min(max(x / 3.0, -1.0), 1.0)
+        assert _bits([math.atan2(x, y), math.asin(c), math.sqrt(abs(x)), math.cos(x), math.sin(x)]) == _bits(
+            [np.arctan2(x, y), np.arcsin(c), np.sqrt(abs(x)), np.cos(x), np.sin(x)]), x
+
+
+def test_rotation_zyx_matches_numpy_trig():
+    rng = np.random.default_rng(17)
+    for z, y, x in rng.normal(size=(3000, 3)) * 2.0:
+        ref = _rz_np(z) @ _ry_np(y) @ _rx_np(x)
+        assert _bits(F.rotation_zyx(z, y, x).ravel()) == _bits(ref.ravel())
+
+
+def _rx_np(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _ry_np(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _rz_np(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
