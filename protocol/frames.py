@@ -19,6 +19,8 @@ Implements docs/CONVENTIONS.md "Frames":
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: ENU -> NED permutation (also NED -> ENU: it is an involution).
@@ -58,17 +60,17 @@ def wrap_pi(angle):
 
 
 def _rx(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = math.cos(a), math.sin(a)  # libm's, as np.cos/np.sin of one float (tests/protocol/test_frames_scalar.py)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def _ry(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = math.cos(a), math.sin(a)  # libm's, as np.cos/np.sin of one float (tests/protocol/test_frames_scalar.py)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def _rz(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = math.cos(a), math.sin(a)  # libm's, as np.cos/np.sin of one float (tests/protocol/test_frames_scalar.py)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
@@ -229,3 +231,97 @@ def mavlink_quaternion_from_quat_wb(q_wb) -> tuple[float, float, float, float]:
     if w < 0.0:
         n = -n
     return w / n, x / n, y / n, z / n
+
+
+# --- scalar forms for the served rig's per-chunk messages (issue 14) -----------------------------
+# The functions below give, bit for bit, what the array functions above give for one attitude,
+# in plain float arithmetic: a 3x3 matrix is a 9-tuple (row-major). numpy's small-array calls
+# cost microseconds each; a served rig builds these messages hundreds of times per simulated
+# second. "Bit for bit" holds where the operations are the same IEEE operations in the same
+# order: a product with T_NED_ENU is a permutation whose sums start from +0 (as numpy's matmul
+# does: a zero entry comes out +0, a NaN or infinity elsewhere in the row still spreads);
+# np.linalg.norm of four numbers is the square root of their squares summed in order;
+# math.atan2, asin and sqrt are the libm functions numpy calls. Non-finite entries (a diverged
+# simulation) go through the array forms, whose NaNs carry their own sign bits. tests/protocol/test_frames_scalar.py
+# checks each against its array form (random attitudes, signed zeros, NaN).
+
+
+def rwb_from_quaternion_xyz(w: float, x: float, y: float, z: float) -> tuple:
+    """R_WB (9-tuple, row-major) of the rig's unit quaternion (scalar first): the formulas of
+    :func:`rig_emulator.physics.rotation.quat_to_rot` (what ``RigSnapshot.rotation`` fills)."""
+    return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+            2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x),
+            2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y))
+
+
+def rwb_to_r_ned_frd_xyz(r: tuple) -> tuple:
+    """:func:`rwb_to_r_ned_frd` of a 9-tuple: T_NED_ENU @ R_WB as numpy's matmul computes it."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = r
+    return (((0.0 + 0.0 * r00) + r10) + 0.0 * r20, ((0.0 + 0.0 * r01) + r11) + 0.0 * r21,
+            ((0.0 + 0.0 * r02) + r12) + 0.0 * r22,
+            ((0.0 + r00) + 0.0 * r10) + 0.0 * r20, ((0.0 + r01) + 0.0 * r11) + 0.0 * r21,
+            ((0.0 + r02) + 0.0 * r12) + 0.0 * r22,
+            ((0.0 + 0.0 * r00) + 0.0 * r10) + -1.0 * r20, ((0.0 + 0.0 * r01) + 0.0 * r11) + -1.0 * r21,
+            ((0.0 + 0.0 * r02) + 0.0 * r12) + -1.0 * r22)
+
+
+def zyx_angles_xyz(r: tuple) -> tuple[float, float, float]:
+    """:func:`_zyx_angles` of a 9-tuple."""
+    return (math.atan2(r[7], r[8]), -math.asin(min(max(r[6], -1.0), 1.0)), math.atan2(r[3], r[0]))
+
+
+def mavlink_euler_from_rwb_xyz(r: tuple) -> tuple[float, float, float]:
+    """:func:`mavlink_euler_from_rwb` of R_WB as a 9-tuple."""
+    if not math.isfinite(sum(r)):  # NaN or infinite entries (a diverged simulation): the array form's NaNs
+        return mavlink_euler_from_rwb(np.array(r).reshape(3, 3))
+    return zyx_angles_xyz(rwb_to_r_ned_frd_xyz(r))
+
+
+def _sqrt(v: float) -> float:
+    return math.sqrt(v) if v >= 0.0 else math.nan  # np.sqrt: NaN for a negative or NaN argument
+
+
+def quaternion_from_rotation_xyz(r: tuple) -> tuple[float, float, float, float]:
+    """:func:`quaternion_from_rotation` of a 9-tuple (Shepperd's method, w >= 0)."""
+    try:
+        return _quaternion_from_rotation_xyz(r)
+    except ZeroDivisionError:  # not a rotation (numpy divides by 0 with a warning): the array form's result
+        return tuple(quaternion_from_rotation(np.array(r).reshape(3, 3)).tolist())
+
+
+def _quaternion_from_rotation_xyz(r: tuple) -> tuple[float, float, float, float]:
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = r
+    trace = r00 + r11 + r22
+    cand = (trace, r00, r11, r22)
+    k = next((i for i, c in enumerate(cand) if c != c), None)  # np.argmax: the first NaN, else the first largest
+    if k is None:
+        k = cand.index(max(cand))
+    if k == 0:
+        s = 2.0 * _sqrt(1.0 + trace)
+        q = (0.25 * s, (r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s)
+    elif k == 1:
+        s = 2.0 * _sqrt(1.0 + r00 - r11 - r22)
+        q = ((r21 - r12) / s, 0.25 * s, (r01 + r10) / s, (r02 + r20) / s)
+    elif k == 2:
+        s = 2.0 * _sqrt(1.0 - r00 + r11 - r22)
+        q = ((r02 - r20) / s, (r01 + r10) / s, 0.25 * s, (r12 + r21) / s)
+    else:
+        s = 2.0 * _sqrt(1.0 - r00 - r11 + r22)
+        q = ((r10 - r01) / s, (r02 + r20) / s, (r12 + r21) / s, 0.25 * s)
+    w, x, y, z = q
+    n = _sqrt(((0.0 + w * w) + x * x) + y * y + z * z)
+    w, x, y, z = w / n, x / n, y / n, z / n
+    return (-w, -x, -y, -z) if w < 0.0 else (w, x, y, z)
+
+
+def mavlink_quaternion_from_rwb_xyz(r: tuple) -> tuple[float, float, float, float]:
+    """:func:`mavlink_quaternion_from_rwb` of R_WB as a 9-tuple."""
+    if not math.isfinite(sum(r)):  # NaN or infinite entries: the array form's NaNs
+        return tuple(mavlink_quaternion_from_rwb(np.array(r).reshape(3, 3)).tolist())
+    return quaternion_from_rotation_xyz(rwb_to_r_ned_frd_xyz(r))
+
+
+def paper_yaw_to_mavlink_xyz(psi: float) -> float:
+    """MAVLink yaw of paper psi, wrapped to [-pi, pi): :func:`paper_euler_to_mavlink`'s third
+    value for one float (Python's float ``%`` is numpy's ``np.mod``: fmod, then the divisor's sign)."""
+    return (math.pi / 2.0 - psi + math.pi) % (2.0 * math.pi) - math.pi

@@ -127,26 +127,40 @@ class FaultInjector:
 
 def fault_status(sim) -> FaultStatus:
     """The :class:`FaultStatus` of a :class:`~rig_emulator.simulation.run.Simulation` now."""
+    return fault_status_of(*fault_status_inputs(sim))
+
+
+def fault_status_inputs(sim) -> tuple:
+    """What :func:`fault_status` reads of ``sim`` now, as plain values (``LiveRig.snapshot`` takes
+    them per chunk and builds the status only when a message reads it)."""
     f = sim.faults
-    us = sim.us
-    flags, v = us.flags.tolist(), us.values  # one conversion for the flags (read per served chunk)
+    v = sim.us.values
     sensed = sim.sensing.params.simulate
     st = sim.sensing.state.sstate
+    return (sim.us.flags.tolist(), float(v[SV.V_TRIP_T]), float(v[SV.V_TRIP_ATT]), float(v[SV.V_TRIP_RATE]),
+            float(v[SV.V_ATT_ERR]), sensed, st.imu_fault_mode.tolist() if sensed else None,
+            st.cell_fault_mode.tolist() if sensed else None, f.motor_faults.tolist(), f.motor_loss.tolist(),
+            bool(sim.up.fs_disarm), len(f.events))
+
+
+def fault_status_of(flags, trip_t, trip_att, trip_rate, att_err, sensed, imu_modes, cell_modes, motor_faults,
+                    motor_loss, fs_disarm, events) -> FaultStatus:
+    """The :class:`FaultStatus` of the values :func:`fault_status_inputs` took."""
     tripped = int(flags[SV.F_FAILSAFE])
     return FaultStatus(
-        imu_faults=tuple(map(int, st.imu_fault_mode.tolist())) if sensed else (),
-        cell_faults=tuple(map(int, st.cell_fault_mode.tolist())) if sensed else (),
-        motor_faults=tuple(map(int, f.motor_faults.tolist())),
-        motor_thrust_loss=tuple(map(float, f.motor_loss.tolist())),
+        imu_faults=tuple(map(int, imu_modes)) if sensed else (),
+        cell_faults=tuple(map(int, cell_modes)) if sensed else (),
+        motor_faults=tuple(map(int, motor_faults)),
+        motor_thrust_loss=tuple(map(float, motor_loss)),
         imu_flagged=tuple(int(flags[SV.F_GYRO + s]) for s in range(3)) if sensed else (0, 0, 0),
         cells_flagged=int(flags[SV.F_CELLS]) if sensed else 0,
         estimate_invalid=int(flags[SV.F_INVALID]) if sensed else 0,
         alerts=int(flags[SV.F_ALERTS]),
         failsafe=tripped,
-        failsafe_action="disarm" if sim.up.fs_disarm else "report",
-        failsafe_time_s=float(v[SV.V_TRIP_T]) if tripped else math.nan,
-        failsafe_attitude_error=float(v[SV.V_TRIP_ATT]),
-        failsafe_rate=float(v[SV.V_TRIP_RATE]),
-        attitude_error=float(v[SV.V_ATT_ERR]),
-        events=len(f.events),
+        failsafe_action="disarm" if fs_disarm else "report",
+        failsafe_time_s=trip_t if tripped else math.nan,
+        failsafe_attitude_error=trip_att,
+        failsafe_rate=trip_rate,
+        attitude_error=att_err,
+        events=events,
     )

@@ -8,6 +8,7 @@ methods of :class:`LiveRig`. Conversions to MAVLink units and NED live in ``prot
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,7 +28,8 @@ from rig_emulator.physics.electrical import SEQUENTIAL_SUM_MAX, supply_current, 
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
-from rig_emulator.simulation.faults import FaultEvent, FaultStatus
+from rig_emulator.simulation.entry_points import entry_point
+from rig_emulator.simulation.faults import FaultEvent, FaultStatus, fault_status_inputs, fault_status_of
 from rig_emulator.simulation import log_layout as L
 from rig_emulator.simulation.run import Simulation
 
@@ -143,6 +145,52 @@ class RigSnapshot:
         return R
 
 
+class _Lazy:
+    """A snapshot field computed on its first read from what :meth:`LiveRig.snapshot` captured
+    (then kept: a non-data descriptor, the instance's own value takes over)."""
+
+    def __init__(self, fn):
+        self.fn = fn
+        self.name = fn.__name__
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.fn(obj)
+        return value
+
+
+class _LiveSnapshot(RigSnapshot):
+    """The snapshot :meth:`LiveRig.snapshot` returns: a :class:`RigSnapshot` whose sensor readings
+    and fault status are built only when read (issue 14: a served rig takes a snapshot every chunk
+    and most chunks' messages read neither). What they are built from is copied when the snapshot
+    is taken, so they are the values of that instant whenever they are read."""
+
+    @_Lazy
+    def sensors(self):
+        captured = self.__dict__.pop("_sensors_src")
+        return None if captured is None else _sensor_snapshot(*captured)
+
+    @_Lazy
+    def faults(self):
+        return fault_status_of(*self.__dict__.pop("_faults_src"))
+
+
+def _sensor_snapshot(imu_raw, si, combined, health, imu_modes, cell_raw, lcp, thrust_est, cell_modes):
+    return SensorSnapshot(
+        imu_raw=imu_raw,
+        imu_si=si,
+        fused=combined,
+        imu_rejected_mask=int(health[0]),
+        imu_fault_modes=tuple(map(int, imu_modes)),
+        cell_raw=cell_raw,
+        cell_grf=(lcp.newton_per_count * (cell_raw - lcp.zero_counts)) / GRAM_FORCE_N,
+        cell_thrust_n=thrust_est,
+        cell_rejected_mask=int(health[1]),
+        cell_fault_modes=tuple(map(int, cell_modes)),
+    )
+
+
 @dataclass(frozen=True)
 class SensorSnapshot:
     """The simulated sensors' latest readings and the estimators' view of their health."""
@@ -197,6 +245,8 @@ class LiveRig:
         self.sim.armed = False
         self._power_on()
         self._snap_values = np.zeros(SNAPSHOT_SIZE)
+        self._fill = None  # _fill_snapshot's entry point for the objects in _fill_key
+        self._fill_key = None
         self._calibrations = 0
         self._mission = None  # (waypoints, radii, holds, speeds, free_xy) stored
         self._charge_c = 0.0  # charge the bench supply delivered since start (C), see power()
@@ -265,31 +315,30 @@ class LiveRig:
 
     # --- observing -----------------------------------------------------------------------
     def snapshot(self) -> RigSnapshot:
-        """What the rig reports (its own estimates when it flies on its sensors) and the truth."""
+        """What the rig reports (its own estimates when it flies on its sensors) and the truth.
+
+        The sensor readings and the fault status are built when first read, from copies taken
+        now (:class:`_LiveSnapshot`); the numbers come from one compiled call whose entry point
+        is looked up once per set of argument objects (as ``Simulation._advance`` does)."""
         sim = self.sim
         v = self._snap_values
         sp, ss = sim.sensing.params, sim.sensing.state
-        _fill_snapshot(sim.x, sim.pp, sim.ref, sim.cout, sim.v_cmd, sp.estimated, ss.att_est, ss.onboard, v)
+        args = (sim.x, sim.pp, sim.ref, sim.cout, sim.v_cmd, sp.estimated, ss.att_est, ss.onboard, v)
+        if self._fill_key is None or not all(map(operator.is_, args, self._fill_key)):
+            self._fill = entry_point(_fill_snapshot, args)
+            self._fill_key = args
+        self._fill(*args)
         attitude_mode = sim.ref[REF_MODE] != 0.0  # attitude or rate mode: no position loop
         t = v.tolist()
-        sensors = None
+        sensors_src = None
         if sp.simulate:
             st = ss.sstate
-            lcp = sp.lcp
-            sensors = SensorSnapshot(
-                imu_raw=ss.imu_raw.copy(),
-                imu_si=ss.awork.si.copy(),
-                fused=ss.awork.combined.copy(),
-                imu_rejected_mask=int(ss.health[0]),
-                imu_fault_modes=tuple(map(int, st.imu_fault_mode.tolist())),
-                cell_raw=ss.cell_raw.copy(),
-                cell_grf=(lcp.newton_per_count * (ss.cell_raw - lcp.zero_counts)) / GRAM_FORCE_N,
-                cell_thrust_n=ss.thrust_est.copy(),
-                cell_rejected_mask=int(ss.health[1]),
-                cell_fault_modes=tuple(map(int, st.cell_fault_mode.tolist())),
-            )
+            sensors_src = (ss.imu_raw.copy(), ss.awork.si.copy(), ss.awork.combined.copy(), ss.health.tolist(),
+                           st.imu_fault_mode.tolist(), ss.cell_raw.copy(), sp.lcp, ss.thrust_est.copy(),
+                           st.cell_fault_mode.tolist())
+        snap = object.__new__(_LiveSnapshot)
         nan3 = (math.nan,) * 3
-        return RigSnapshot(
+        snap.__dict__.update(
             time_s=float(sim.time),
             time_us=sim.time_us,
             armed=sim.armed,
@@ -317,9 +366,10 @@ class LiveRig:
             true_velocity=tuple(t[58:61]),
             true_quaternion=tuple(t[61:65]),
             true_body_rates=tuple(t[65:68]),
-            sensors=sensors,
-            faults=sim.fault_status(),
+            _sensors_src=sensors_src,
+            _faults_src=fault_status_inputs(sim),
         )
+        return snap
 
     @property
     def supply_voltage(self) -> float:

@@ -10,10 +10,10 @@ import math
 
 from protocol.dialect import mavlink
 from protocol.frames import (
-    mavlink_body_rates_from_omega_b,
-    mavlink_euler_from_rwb,
-    mavlink_quaternion_from_rwb,
+    mavlink_euler_from_rwb_xyz,
+    mavlink_quaternion_from_rwb_xyz,
     rwb_from_paper_euler,
+    rwb_from_quaternion_xyz,
 )
 from rig_emulator.config.schema import STRATEGIES
 from rig_emulator.link.telemetry import units as U
@@ -37,23 +37,24 @@ def thrust_fraction(u1_n: float, cfg) -> float:
 
 
 def attitude(snap, ctx):
-    roll, pitch, yaw = mavlink_euler_from_rwb(snap.rotation)
-    p, q, r = mavlink_body_rates_from_omega_b(snap.body_rates)
+    roll, pitch, yaw = mavlink_euler_from_rwb_xyz(rwb_from_quaternion_xyz(*snap.quaternion))
+    p, q, r = snap.body_rates  # FRD in both conventions (protocol.frames.mavlink_body_rates_from_omega_b)
     return mavlink.MAVLink_attitude_message(
         time_boot_ms=U.time_boot_ms(snap.stamp_us), roll=roll, pitch=pitch, yaw=yaw,
         rollspeed=float(p), pitchspeed=float(q), yawspeed=float(r))
 
 
 def attitude_quaternion(snap, ctx):
-    w, x, y, z = mavlink_quaternion_from_rwb(snap.rotation)
-    p, q, r = mavlink_body_rates_from_omega_b(snap.body_rates)
+    w, x, y, z = mavlink_quaternion_from_rwb_xyz(rwb_from_quaternion_xyz(*snap.quaternion))
+    p, q, r = snap.body_rates
     return mavlink.MAVLink_attitude_quaternion_message(
         time_boot_ms=U.time_boot_ms(snap.stamp_us), q1=float(w), q2=float(x), q3=float(y), q4=float(z),
         rollspeed=float(p), pitchspeed=float(q), yawspeed=float(r), repr_offset_q=[0.0, 0.0, 0.0, 0.0])
 
 
 def attitude_target(snap, ctx):
-    q = mavlink_quaternion_from_rwb(rwb_from_paper_euler(*snap.euler_target))
+    # R from the Euler angles stays numpy's matmul (its rounding is BLAS's, not a fixed order of sums)
+    q = mavlink_quaternion_from_rwb_xyz(tuple(rwb_from_paper_euler(*snap.euler_target).ravel().tolist()))
     p, qr, r = body_rates_from_paper_euler_rates(snap.euler_target, snap.euler_rate_target)
     return mavlink.MAVLink_attitude_target_message(
         time_boot_ms=U.time_boot_ms(snap.stamp_us), type_mask=0, q=[float(v) for v in q],

@@ -21,6 +21,7 @@ When the snapshot gains ``imu_raw``, ``load_cells_raw``, ``load_cells_grf``,
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,20 +119,27 @@ def sensor_readings(snap, model: SensorModel, gravity: float) -> SensorReadings:
 
 def _fault_codes(modes) -> tuple:
     """rig_emulator.sensors.faults codes are HILMS_FAULT codes (NONE STUCK DEAD BIAS NOISE SPIKE)."""
-    return tuple(int(m) for m in modes)
+    return tuple(map(int, modes))
+
+
+@functools.lru_cache(maxsize=256)
+def _mask_bits(mask: int, n: int) -> tuple:
+    """(bit 0 set, bit 1 set, ...) of ``mask`` for ``n`` devices (read per served chunk: cached)."""
+    return tuple(bool(mask & (1 << i)) for i in range(n))
 
 
 def _simulated(sensors) -> SensorReadings:
     """The simulated sensors' readings (raw counts, calibrated SI, the ensemble, load cells)."""
     si = sensors.imu_si
+    fused = sensors.fused
     imu_faults = _fault_codes(sensors.imu_fault_modes)
     cell_faults = _fault_codes(sensors.cell_fault_modes)
     return SensorReadings(
         gyro=si[:, 0, :], accel=si[:, 1, :], mag=si[:, 2, :], imu_raw_counts=sensors.imu_raw,
         imu_faults=imu_faults,
-        fused_gyro=sensors.fused[0], fused_accel=sensors.fused[1], fused_mag=sensors.fused[2],
+        fused_gyro=fused[0], fused_accel=fused[1], fused_mag=fused[2],
         load_raw_counts=sensors.cell_raw, load_force_grf=sensors.cell_grf, load_thrust_n=sensors.cell_thrust_n,
         load_faults=cell_faults, ideal=False,
-        imu_rejected=tuple(bool(sensors.imu_rejected_mask & (1 << m)) for m in range(len(imu_faults))),
-        load_rejected=tuple(bool(sensors.cell_rejected_mask & (1 << c)) for c in range(len(cell_faults))),
+        imu_rejected=_mask_bits(int(sensors.imu_rejected_mask), len(imu_faults)),
+        load_rejected=_mask_bits(int(sensors.cell_rejected_mask), len(cell_faults)),
     )

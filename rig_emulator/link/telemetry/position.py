@@ -14,7 +14,8 @@ import math
 import numpy as np
 
 from protocol.dialect import mavlink
-from protocol.frames import enu_to_ned, mavlink_euler_from_rwb, mavlink_quaternion_from_rwb, paper_euler_to_mavlink
+from protocol.frames import (enu_to_ned_xyz, mavlink_euler_from_rwb_xyz, mavlink_quaternion_from_rwb_xyz,
+                             paper_yaw_to_mavlink_xyz, rwb_from_quaternion_xyz)
 from protocol.geodesy import ecef_to_enu_rotation, ecef_to_geodetic_xyz, geodetic_to_ecef
 from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.telemetry.attitude import thrust_fraction
@@ -31,22 +32,23 @@ IGNORE_POS_VEL = (mavlink.POSITION_TARGET_TYPEMASK_X_IGNORE | mavlink.POSITION_T
 
 @functools.lru_cache(maxsize=8)
 def _home_frame(home) -> tuple:
-    """``ecef_to_enu_rotation`` and ``geodetic_to_ecef`` of ``home`` (read-only): what
-    :func:`protocol.geodesy.local_enu_to_global` recomputes on every call."""
+    """``ecef_to_enu_rotation`` (9-tuple, row-major) and ``geodetic_to_ecef`` (3-tuple) of
+    ``home``: what :func:`protocol.geodesy.local_enu_to_global` recomputes on every call."""
     r = ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
     origin = geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m)
-    r.setflags(write=False)
-    origin.setflags(write=False)
-    return r, origin
+    return tuple(r.ravel().tolist()), tuple(origin.tolist())
 
 
 def enu_to_global(home, enu):
     """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, bit-identical: ``home``'s
-    frame computed once, the conversion back to geodetic in scalar math
-    (:func:`protocol.geodesy.ecef_to_geodetic_xyz`)."""
-    r, origin = _home_frame(home)
-    x, y, z = (origin + np.asarray(enu, dtype=float) @ r).tolist()
-    return ecef_to_geodetic_xyz(x, y, z)
+    frame computed once; ``origin + enu @ r`` in scalar math, the products summed in order from
+    +0 as numpy's vector-matrix product does (tests/rig_emulator/link/telemetry/test_position_geodesy.py);
+    the conversion back to geodetic in scalar math (:func:`protocol.geodesy.ecef_to_geodetic_xyz`)."""
+    (r00, r01, r02, r10, r11, r12, r20, r21, r22), (o0, o1, o2) = _home_frame(home)
+    e, n, u = (float(v) for v in enu)
+    return ecef_to_geodetic_xyz(o0 + (((0.0 + e * r00) + n * r10) + u * r20),
+                                o1 + (((0.0 + e * r01) + n * r11) + u * r21),
+                                o2 + (((0.0 + e * r02) + n * r12) + u * r22))
 
 
 def _global(snap, ctx, position=None):
@@ -54,16 +56,20 @@ def _global(snap, ctx, position=None):
     return float(lat), float(lon), float(alt)
 
 
+def _ned(v) -> tuple[float, float, float]:
+    """protocol.frames.enu_to_ned of one vector, as floats."""
+    return enu_to_ned_xyz(*v)
+
+
 def _yaw(snap) -> float:
-    return mavlink_euler_from_rwb(snap.rotation)[2]
+    return mavlink_euler_from_rwb_xyz(rwb_from_quaternion_xyz(*snap.quaternion))[2]
 
 
 def local_position_ned(snap, ctx):
-    x, y, z = enu_to_ned(snap.position)
-    vx, vy, vz = enu_to_ned(snap.velocity)
+    x, y, z = _ned(snap.position)
+    vx, vy, vz = _ned(snap.velocity)
     return mavlink.MAVLink_local_position_ned_message(
-        time_boot_ms=U.time_boot_ms(snap.stamp_us), x=float(x), y=float(y), z=float(z),
-        vx=float(vx), vy=float(vy), vz=float(vz))
+        time_boot_ms=U.time_boot_ms(snap.stamp_us), x=x, y=y, z=z, vx=vx, vy=vy, vz=vz)
 
 
 def position_target_local_ned(snap, ctx):
@@ -73,8 +79,8 @@ def position_target_local_ned(snap, ctx):
         mask |= IGNORE_POS_VEL
         pos = vel = (0.0, 0.0, 0.0)
     else:
-        pos, vel = enu_to_ned(snap.position_target), enu_to_ned(snap.velocity_target)
-    yaw = paper_euler_to_mavlink(*snap.euler_target)[2]
+        pos, vel = _ned(snap.position_target), _ned(snap.velocity_target)
+    yaw = paper_yaw_to_mavlink_xyz(float(snap.euler_target[2]))
     return mavlink.MAVLink_position_target_local_ned_message(
         time_boot_ms=U.time_boot_ms(snap.stamp_us), coordinate_frame=mavlink.MAV_FRAME_LOCAL_NED, type_mask=mask,
         x=float(pos[0]), y=float(pos[1]), z=float(pos[2]), vx=float(vel[0]), vy=float(vel[1]), vz=float(vel[2]),
@@ -83,7 +89,7 @@ def position_target_local_ned(snap, ctx):
 
 def global_position_int(snap, ctx):
     lat, lon, alt = _global(snap, ctx)
-    vn, ve, vd = enu_to_ned(snap.velocity)
+    vn, ve, vd = _ned(snap.velocity)
     return mavlink.MAVLink_global_position_int_message(
         time_boot_ms=U.time_boot_ms(snap.stamp_us), lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt),
         relative_alt=U.mm(alt - ctx.home.alt_m), vx=U.cm_s_i16(vn), vy=U.cm_s_i16(ve), vz=U.cm_s_i16(vd),
@@ -92,7 +98,7 @@ def global_position_int(snap, ctx):
 
 def gps_raw_int(snap, ctx):
     lat, lon, alt = _global(snap, ctx)
-    vn, ve, _ = enu_to_ned(snap.velocity)
+    vn, ve, _ = _ned(snap.velocity)
     ground_speed = math.hypot(vn, ve)
     cog = U.heading_rad_to_cdeg(math.atan2(ve, vn)) if ground_speed > 0.01 else U.UINT16_UNKNOWN
     accuracy_mm = U.mm(GPS_ACCURACY_M)
@@ -107,16 +113,16 @@ def home_position(snap, ctx):
     """Home: the local origin (``--home``) moved by DO_SET_HOME (its height stays on the ground)."""
     enu = ctx.flight.tasks.home if ctx.flight is not None else np.zeros(3)
     lat, lon, alt = enu_to_global(ctx.home, enu)
-    n, e, d = enu_to_ned(enu)
+    n, e, d = _ned(enu)
     return mavlink.MAVLink_home_position_message(
         latitude=U.deg_e7(lat), longitude=U.deg_e7(lon), altitude=U.mm(alt),
-        x=float(n), y=float(e), z=float(d), q=[1.0, 0.0, 0.0, 0.0], approach_x=0.0, approach_y=0.0, approach_z=0.0,
+        x=n, y=e, z=d, q=[1.0, 0.0, 0.0, 0.0], approach_x=0.0, approach_y=0.0, approach_z=0.0,
         time_usec=U.time_usec(snap.stamp_us))
 
 
 def vfr_hud(snap, ctx):
     _, _, alt = _global(snap, ctx)
-    vn, ve, vd = enu_to_ned(snap.velocity)
+    vn, ve, vd = _ned(snap.velocity)
     speed = math.hypot(vn, ve)
     return mavlink.MAVLink_vfr_hud_message(
         airspeed=speed, groundspeed=speed, heading=U.heading_rad_to_deg(_yaw(snap)),
@@ -126,15 +132,17 @@ def vfr_hud(snap, ctx):
 def sim_state(snap, ctx):
     """The true state (the physics, not the rig's estimates): attitude, specific force at the
     joint, body rates, virtual position and velocity."""
-    r_true = snap.true_rotation
-    w, x, y, z = mavlink_quaternion_from_rwb(r_true)
-    roll, pitch, yaw = mavlink_euler_from_rwb(r_true)
+    r_true = rwb_from_quaternion_xyz(*snap.true_quaternion)
+    w, x, y, z = mavlink_quaternion_from_rwb_xyz(r_true)
+    roll, pitch, yaw = mavlink_euler_from_rwb_xyz(r_true)
     lat, lon, alt = _global(snap, ctx, snap.true_position)
-    vn, ve, vd = enu_to_ned(snap.true_velocity)
-    acc = r_true.T @ np.array([0.0, 0.0, ctx.cfg["airframe.gravity"]])  # true specific force, FRD
+    vn, ve, vd = _ned(snap.true_velocity)
+    g = float(ctx.cfg["airframe.gravity"])
+    # true specific force, FRD: R^T [0, 0, g], summed as numpy's matrix-vector product (from +0, in order)
+    acc = [((0.0 + r_true[i] * 0.0) + r_true[3 + i] * 0.0) + r_true[6 + i] * g for i in range(3)]
     return mavlink.MAVLink_sim_state_message(
         q1=float(w), q2=float(x), q3=float(y), q4=float(z), roll=roll, pitch=pitch, yaw=yaw,
-        xacc=float(acc[0]), yacc=float(acc[1]), zacc=float(acc[2]),
+        xacc=acc[0], yacc=acc[1], zacc=acc[2],
         xgyro=snap.true_body_rates[0], ygyro=snap.true_body_rates[1], zgyro=snap.true_body_rates[2],
         lat=lat, lon=lon, alt=alt, std_dev_horz=0.0, std_dev_vert=0.0,
-        vn=float(vn), ve=float(ve), vd=float(vd), lat_int=U.deg_e7(lat), lon_int=U.deg_e7(lon))
+        vn=vn, ve=ve, vd=vd, lat_int=U.deg_e7(lat), lon_int=U.deg_e7(lon))

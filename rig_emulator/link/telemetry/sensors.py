@@ -16,7 +16,8 @@ LOAD_CELL_NAMES = ("LC1_N", "LC2_N", "LC3_N", "LC4_N")  # NAMED_VALUE_FLOAT mirr
 
 def _scaled(cls, snap, ctx, module: int):
     r = ctx.readings(snap)
-    a, g, m = r.accel[module], r.gyro[module], r.mag[module]
+    # as Python floats (the same values): the unit conversions run in scalar math, not on numpy scalars
+    a, g, m = r.accel[module].tolist(), r.gyro[module].tolist(), r.mag[module].tolist()
     return cls(
         time_boot_ms=U.time_boot_ms(snap.stamp_us),
         xacc=U.milli_g(a[0]), yacc=U.milli_g(a[1]), zacc=U.milli_g(a[2]),
@@ -42,10 +43,10 @@ def scaled_imu3(snap, ctx):
 def highres_imu(snap, ctx):
     """The fused IMU reading (SI: m/s^2, rad/s, gauss)."""
     r = ctx.readings(snap)
-    a, g, m = r.fused_accel, r.fused_gyro, r.fused_mag
+    a, g, m = r.fused_accel.tolist(), r.fused_gyro.tolist(), r.fused_mag.tolist()
     return mavlink.MAVLink_highres_imu_message(
-        time_usec=U.time_usec(snap.stamp_us), xacc=float(a[0]), yacc=float(a[1]), zacc=float(a[2]),
-        xgyro=float(g[0]), ygyro=float(g[1]), zgyro=float(g[2]),
+        time_usec=U.time_usec(snap.stamp_us), xacc=a[0], yacc=a[1], zacc=a[2],
+        xgyro=g[0], ygyro=g[1], zgyro=g[2],
         xmag=U.gauss(m[0]), ymag=U.gauss(m[1]), zmag=U.gauss(m[2]),
         abs_pressure=0.0, diff_pressure=0.0, pressure_alt=0.0, temperature=0.0,
         fields_updated=HIGHRES_FIELDS_IMU, id=0)
@@ -55,9 +56,10 @@ def hilms_imu_module(snap, ctx):
     """One HILMS_IMU_MODULE per module, raw counts in the module's axes."""
     r = ctx.readings(snap)
     out = []
-    for i, raw in enumerate(r.imu_raw_counts):
+    t_us = U.time_usec(snap.stamp_us)
+    for i, raw in enumerate(r.imu_raw_counts.tolist()):
         out.append(mavlink.MAVLink_hilms_imu_module_message(
-            time_usec=U.time_usec(snap.stamp_us), module_index=i,
+            time_usec=t_us, module_index=i,
             gyro_raw=[U.raw_count_i16(c) for c in raw[0:3]], accel_raw=[U.raw_count_i16(c) for c in raw[3:6]],
             mag_raw=[U.raw_count_i16(c) for c in raw[6:9]],
             fault=int(r.imu_faults[i])))
@@ -75,8 +77,8 @@ def _load_health(snap, readings) -> int:
 def hilms_load_cells(snap, ctx):
     r = ctx.readings(snap)
     return mavlink.MAVLink_hilms_load_cells_message(
-        time_usec=U.time_usec(snap.stamp_us), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts],
-        force_grf=[float(f) for f in r.load_force_grf], thrust_n=[float(f) for f in r.load_thrust_n],
+        time_usec=U.time_usec(snap.stamp_us), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts.tolist()],
+        force_grf=r.load_force_grf.tolist(), thrust_n=r.load_thrust_n.tolist(),
         health=_load_health(snap, r))
 
 
@@ -85,4 +87,4 @@ def named_value_float(snap, ctx):
     r = ctx.readings(snap)
     t = U.time_boot_ms(snap.stamp_us)
     return [mavlink.MAVLink_named_value_float_message(time_boot_ms=t, name=name.encode("ascii"), value=float(f))
-            for name, f in zip(LOAD_CELL_NAMES, r.load_thrust_n)]
+            for name, f in zip(LOAD_CELL_NAMES, r.load_thrust_n.tolist())]

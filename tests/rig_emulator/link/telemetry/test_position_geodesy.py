@@ -13,3 +13,9 @@ def test_enu_to_global_is_local_enu_to_global_bit_for_bit():
             enu = rng.normal(0.0, 10.0 ** float(rng.integers(-3, 4)), 3)
             assert enu_to_global(home, enu) == local_enu_to_global(home, enu)
             assert enu_to_global(home, tuple(enu.tolist())) == local_enu_to_global(home, enu)
+
+
+def test_enu_to_global_at_the_origin_and_on_the_axes():
+    home = Home(35.7, 51.4, 1200.0)
+    for enu in ((0.0, 0.0, 0.0), (-0.0, -0.0, -0.0), (3.0, 0.0, -0.0), (0.0, -2.5, 0.0), (0.0, 0.0, 1e-9)):
+        assert enu_to_global(home, enu) == local_enu_to_global(home, np.array(enu))
