@@ -82,7 +82,9 @@ def _axis_errors(ref, k, pos, vel):
     return e, de, (0.0 if math.isnan(a) else a)
 
 
-@jit(nrt=False)
+# inlined: one call site (the step loop), at every control step; a call passed cp (ControlParams) and
+# 21 more arguments field by field (benchmarks/README.md, hardware-rig)
+@jit(inline="always")
 def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, ref, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
     """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays.
 

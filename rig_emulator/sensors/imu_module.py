@@ -242,7 +242,9 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
                         fault_magnitude, rng, raw_out)
 
 
-@jit(nrt=False)
+# inlined: a call passed the IMU kernel and state field by field every sampled step; two call sites
+# (the step loop through sensors_step, and sample_imu_modules for the calibration), so it is typed twice
+@jit(inline="always")
 def _sample_imu_modules(q, omega_B, omega_dot_B, vib, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
                         rng, raw_out):
     """:func:`sample_imu_modules` without reference counting, for the step loop.
