@@ -72,7 +72,8 @@ def test_nrt_false_refuses_to_allocate():
 # Every compiled function of the step loop that takes arrays and is not inline="always"
 # (inlined ones are compiled as part of their caller).
 INLINED = (integrator.rk4_step, rigid_body.state_derivative, loop._sense, sensor_step.sensors_step,
-           controller.control_update, imu_module._sample_imu_modules)
+           controller.control_update, controller.position_stage, controller.attitude_stage, controller.actuate,
+           controller.record_decision, imu_module._sample_imu_modules)
 STEP_LOOP = (
     loop.run_steps, loop._log_row,
     # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step, controller.control_update and
