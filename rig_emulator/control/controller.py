@@ -82,11 +82,11 @@ def _axis_errors(ref, k, pos, vel):
     return e, de, (0.0 if math.isnan(a) else a)
 
 
-# inlined, and so are its stages: a call passed cp (ControlParams) and the other arguments field by
-# field at every control step (benchmarks/README.md, hardware-rig). control_update has one call site
-# (the step loop); the stages are also called from the plug-in path (control/plugin_step.py), so a
-# rig with a plug-in types them once more (one without it prunes that path)
-@jit(inline="always")
+# a call from the step loop (inlining it there cost cold compile time, benchmarks/README.md,
+# hardware-rig); its stages are inlined into it: a call passed cp (ControlParams) and the other
+# arguments field by field at every control step. They are also inlined into the plug-in path
+# (control/plugin_step.py), so a rig with a plug-in types them once more (one without prunes it)
+@jit(nrt=False)
 def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, ref, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
     """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays.
 

@@ -242,9 +242,10 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
                         fault_magnitude, rng, raw_out)
 
 
-# inlined: a call passed the IMU kernel and state field by field every sampled step; two call sites
-# (the step loop through sensors_step, and sample_imu_modules for the calibration), so it is typed twice
-@jit(inline="always")
+# a call, not inline="always": it has two call sites (the step loop through sensors_step, and
+# sample_imu_modules for the calibration), and inlining it (typing it twice) cost 12 % of the cold
+# compile for about 0.1 us a step (benchmarks/README.md, hardware-rig)
+@jit(nrt=False)
 def _sample_imu_modules(q, omega_B, omega_dot_B, vib, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
                         rng, raw_out):
     """:func:`sample_imu_modules` without reference counting, for the step loop.

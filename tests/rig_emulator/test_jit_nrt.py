@@ -72,19 +72,19 @@ def test_nrt_false_refuses_to_allocate():
 # Every compiled function of the step loop that takes arrays and is not inline="always"
 # (inlined ones are compiled as part of their caller).
 INLINED = (integrator.rk4_step, rigid_body.state_derivative, loop._sense, sensor_step.sensors_step,
-           controller.control_update, controller.position_stage, controller.attitude_stage, controller.actuate,
-           controller.record_decision, imu_module._sample_imu_modules)
+           controller.position_stage, controller.attitude_stage, controller.actuate, controller.record_decision)
 STEP_LOOP = (
     loop.run_steps, loop._log_row,
-    # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step, controller.control_update and
-    # imu_module._sample_imu_modules are inline="always" (a call passed their namedtuples field by field
-    # every step or control step, benchmarks/README.md)
+    # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step and control_update's stages are
+    # inline="always" (a call passed their namedtuples field by field every step or control step,
+    # benchmarks/README.md)
     integrator.apply_ground,
     disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
     rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
+    controller.control_update,
     runner.guidance_update, runner._waypoints, runner._start_leg, runner._advance, runner.start_at,
     trajectories.helix_eq46, trajectories.harmonic_attitude, waypoint_switching.line_setpoint,
-    supervisor.supervise,
+    imu_module._sample_imu_modules, supervisor.supervise,
     # called, not inlined (the cold compile, issue 14)
     attitude_pipeline.attitude_estimation_step,
     load_cell_filter.load_cell_filter_step, onboard_position.onboard_translation_step, smc.smc_attitude,
