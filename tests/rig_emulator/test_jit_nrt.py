@@ -71,11 +71,13 @@ def test_nrt_false_refuses_to_allocate():
 
 # Every compiled function of the step loop that takes arrays and is not inline="always"
 # (inlined ones are compiled as part of their caller).
-INLINED = (integrator.rk4_step, rigid_body.state_derivative, loop._sense, sensor_step.sensors_step)
+INLINED = (integrator.rk4_step, rigid_body.state_derivative, loop._sense, sensor_step.sensors_step,
+           controller.position_stage, controller.attitude_stage, controller.actuate, controller.record_decision)
 STEP_LOOP = (
     loop.run_steps, loop._log_row,
-    # rk4_step, state_derivative, loop._sense and sensor_step.sensors_step are inline="always" (one call
-    # site each: a call passed their namedtuples field by field every step, benchmarks/README.md)
+    # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step and control_update's stages are
+    # inline="always" (a call passed their namedtuples field by field every step or control step,
+    # benchmarks/README.md)
     integrator.apply_ground,
     disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
     rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
