@@ -120,7 +120,6 @@ class RigServer:
         self.clock_rebase = False
         self._stop = False
         self._snap = None
-        self._console_key = None  # (armed, main mode, sub mode, console) the console last saw
         self._statustext_id = 0
         self._next_heartbeat = 0.0
         self._handlers = {
@@ -328,11 +327,7 @@ class RigServer:
         self.fence.poll()
         self.flight.poll(self.snapshot)
         self.report_faults()
-        modes, console = self.modes, self.console
-        key = (self.rig.armed, modes.main, modes.sub, console)
-        if key != self._console_key:  # Console.poll prints arming and mode changes: nothing to do without one
-            self._console_key = key
-            console.poll(self.rig.time_s, key[0], modes.name)
+        self.console.poll(self.rig.time_s, self.rig.armed, self.modes.main, self.modes.sub)
 
     def report_faults(self) -> None:
         """STATUSTEXT for new fault injections and detections; a HEARTBEAT at once when the

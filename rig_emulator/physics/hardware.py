@@ -72,7 +72,7 @@ HardwareParams = namedtuple(
         "vib_blades",      # blades per rotor (the blade-pass frequency is blades x rotor speed)
         "vib_omega_ref",   # hover rotor speed, rad/s (amplitudes scale with (Omega / this)^2)
         "vib_phase",       # (4,) blade-pass phase of each rotor, rad (state)
-        "curve_memo",      # (4, 3) per motor the last (V / V_p, n, (V / V_p)^n) of motor_thrust (a cache)
+        "curve_memo",      # (4, 2) per motor the last (V / V_p, (V / V_p)^n) of motor_thrust (a cache; new with n)
     ],
 )
 
@@ -80,7 +80,7 @@ HardwareParams = namedtuple(
 def neutral_arrays():
     """State arrays of a plant with no effects (shape-compatible with any HardwareParams)."""
     return dict(cmd_buf=np.zeros((1, 4)), cmd_out=np.zeros(4), noise_torque=np.zeros(3),
-                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4), curve_memo=np.full((4, 3), np.nan))
+                rng=np.zeros(1, dtype=np.uint64), vib_phase=np.zeros(4), curve_memo=np.full((4, 2), np.nan))
 
 
 # --- joint --------------------------------------------------------------------------------
@@ -189,16 +189,16 @@ def motor_thrust(v, i, k_v, f_ceiling, efficiency, hw):
     else:
         # the power is a libm call (pow), the hardware rig's most expensive per step; a step asks for
         # the thrust at the same voltage several times (vibration, load cells, log, the first RK4
-        # stage), so the last power per motor is kept: the same inputs give the same bits
+        # stage), so the last power per motor is kept: the same inputs give the same bits (a memo is
+        # new with every HardwareParams, simulation/params.py, so its exponent is fixed)
         r = v / hw.curve_vp
         memo = hw.curve_memo
-        if r == memo[i, 0] and hw.curve_n == memo[i, 1]:
-            pw = memo[i, 2]
+        if r == memo[i, 0]:
+            pw = memo[i, 1]
         else:
             pw = r ** hw.curve_n
             memo[i, 0] = r
-            memo[i, 1] = hw.curve_n
-            memo[i, 2] = pw
+            memo[i, 1] = pw
         f = hw.curve_fp * pw
     if hw.bias != 0.0 and v > 0.0:
         f += hw.bias

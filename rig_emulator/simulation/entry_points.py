@@ -15,6 +15,8 @@ typing (a test compares the two over every preset and strategy).
 
 from __future__ import annotations
 
+import operator
+
 import numpy as np
 from numba.core.ccallback import CFunc
 from numba.core.types.function_type import WrapperAddressProtocol
@@ -75,3 +77,29 @@ def entry_point(dispatcher, args: tuple):
 def signature(dispatcher, args: tuple) -> tuple:
     """numba's own types of ``args`` (what the key stands for)."""
     return tuple(dispatcher.typeof_pyval(a) for a in args)
+
+
+class BoundEntry:
+    """The entry point of one dispatcher for the argument objects a caller last passed: looked
+    up (:func:`entry_point`) again only when one of them is replaced (a parameter change, a new
+    mission, ...). The objects are compared by identity and held, so that their ids cannot be
+    reused; leave scalars out of ``objs``."""
+
+    __slots__ = ("dispatcher", "_objs", "_entry")
+
+    def __init__(self, dispatcher):
+        self.dispatcher = dispatcher
+        self.forget()
+
+    def forget(self) -> None:
+        """Look the entry point up again on the next call."""
+        self._objs = None
+        self._entry = None
+
+    def __call__(self, args: tuple, objs: tuple):
+        """The entry point for ``args``, whose non-scalar objects are ``objs``."""
+        prev = self._objs
+        if prev is None or not all(map(operator.is_, objs, prev)):
+            self._entry = entry_point(self.dispatcher, args)  # compiles or loads the cache the first time
+            self._objs = objs
+        return self._entry

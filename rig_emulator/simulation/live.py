@@ -8,7 +8,6 @@ methods of :class:`LiveRig`. Conversions to MAVLink units and NED live in ``prot
 from __future__ import annotations
 
 import math
-import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,7 +27,7 @@ from rig_emulator.physics.electrical import SEQUENTIAL_SUM_MAX, supply_current, 
 from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
-from rig_emulator.simulation.entry_points import entry_point
+from rig_emulator.simulation.entry_points import BoundEntry
 from rig_emulator.simulation.faults import FaultEvent, FaultStatus, fault_status_inputs, fault_status_of
 from rig_emulator.simulation import log_layout as L
 from rig_emulator.simulation.run import Simulation
@@ -245,8 +244,7 @@ class LiveRig:
         self.sim.armed = False
         self._power_on()
         self._snap_values = np.zeros(SNAPSHOT_SIZE)
-        self._fill = None  # _fill_snapshot's entry point for the objects in _fill_key
-        self._fill_key = None
+        self._fill = BoundEntry(_fill_snapshot)
         self._calibrations = 0
         self._mission = None  # (waypoints, radii, holds, speeds, free_xy) stored
         self._charge_c = 0.0  # charge the bench supply delivered since start (C), see power()
@@ -319,15 +317,12 @@ class LiveRig:
 
         The sensor readings and the fault status are built when first read, from copies taken
         now (:class:`_LiveSnapshot`); the numbers come from one compiled call whose entry point
-        is looked up once per set of argument objects (as ``Simulation._advance`` does)."""
+        is looked up once per set of argument objects (:class:`~rig_emulator.simulation.entry_points.BoundEntry`)."""
         sim = self.sim
         v = self._snap_values
         sp, ss = sim.sensing.params, sim.sensing.state
         args = (sim.x, sim.pp, sim.ref, sim.cout, sim.v_cmd, sp.estimated, ss.att_est, ss.onboard, v)
-        if self._fill_key is None or not all(map(operator.is_, args, self._fill_key)):
-            self._fill = entry_point(_fill_snapshot, args)
-            self._fill_key = args
-        self._fill(*args)
+        self._fill(args, args)(*args)
         attitude_mode = sim.ref[REF_MODE] != 0.0  # attitude or rate mode: no position loop
         t = v.tolist()
         sensors_src = None

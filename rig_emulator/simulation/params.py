@@ -116,7 +116,7 @@ def hardware_params(cfg: RigConfig, k_v: float, dt: float, previous: HardwarePar
         vib_blades=float(cfg["vibration.blades"]),
         vib_omega_ref=_hover_rotor_speed(cfg),
         vib_phase=phase,
-        curve_memo=np.full((4, 3), np.nan),
+        curve_memo=np.full((4, 2), np.nan),
     )
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import operator
 import time
 from dataclasses import dataclass, field
 
@@ -19,7 +18,7 @@ from rig_emulator.physics.rotation import quat_from_euler
 from rig_emulator.simulation import log_layout as L
 from rig_emulator.control.supervisor import F_FAILSAFE, reset_failsafe, supervisor_params, supervisor_state
 from rig_emulator.simulation.faults import FaultEvent, FaultInjector, FaultStatus, fault_status
-from rig_emulator.simulation.entry_points import entry_point
+from rig_emulator.simulation.entry_points import BoundEntry
 from rig_emulator.simulation.loop import run_steps
 from rig_emulator.control.plugin_layout import P_EXTERNAL
 from rig_emulator.simulation.plugin import plugin_binding, unreported_attitude
@@ -117,8 +116,7 @@ class Simulation:
         self.log_row = 0
         self.k = 0
         self._armed = True
-        self._entry = None
-        self._entry_key = None
+        self._loop = BoundEntry(run_steps)  # the step loop's entry point for this rig's objects
 
     @property
     def time(self) -> float:
@@ -181,14 +179,8 @@ class Simulation:
             self.sensing.params, self.sensing.state, self.sensing.run_rng.bit_generator, self.up, self.us,
             self.plugin.params, self.plugin.fn,
         )
-        # the objects the entry point was looked up for (held, so that their ids cannot be reused):
-        # compared by identity in C (map), the scalars between them (log_row, armed) left out
-        objs = args[5:23] + args[25:]
-        prev = self._entry_key
-        if prev is None or not all(map(operator.is_, objs, prev)):
-            self._entry = entry_point(run_steps, args)  # compiles or loads the cache the first time
-            self._entry_key = objs
-        self.log_row = self._entry(*args)
+        # the scalars between the objects (log_row, armed) are left out of the lookup's key
+        self.log_row = self._loop(args, args[5:23] + args[25:])(*args)
         self.k += n_steps
         if self.plugin.params.status[0] != 0 and self.plugin_failure is None:
             self._plugin_failed()

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import sys
 
+from rig_emulator.link.commands.modes import FlightModes
+
 SEVERITY = {0: "EMERGENCY", 1: "ALERT", 2: "CRITICAL", 3: "ERROR", 4: "WARNING", 5: "NOTICE", 6: "INFO", 7: "DEBUG"}
 
 
@@ -31,10 +33,15 @@ class Console:
     def statustext(self, t: float, severity: int, text: str) -> None:
         self.line(t, f"{SEVERITY.get(severity, str(severity))}: {text}")
 
-    def poll(self, t: float, armed: bool, mode: str) -> None:
-        """Print arming and mode changes since the last call."""
+    def poll(self, t: float, armed: bool, main: int, sub: int) -> None:
+        """Print arming and mode changes (PX4 main and sub mode) since the last call. Called
+        after every chunk: with no change it returns at once (the mode's name is made only
+        for the line that prints it)."""
+        mode = (main, sub)
+        if armed == self._armed and mode == self._mode:
+            return
         if self._armed is not None and armed != self._armed:
             self.line(t, "armed" if armed else "disarmed")
         if self._mode is not None and mode != self._mode:
-            self.line(t, f"mode {mode}")
+            self.line(t, f"mode {FlightModes.name_of(main, sub)}")
         self._armed, self._mode = armed, mode

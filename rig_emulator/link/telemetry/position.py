@@ -16,7 +16,7 @@ import numpy as np
 from protocol.dialect import mavlink
 from protocol.frames import (enu_to_ned_xyz, mavlink_euler_from_rwb_xyz, mavlink_quaternion_from_rwb_xyz,
                              paper_yaw_to_mavlink_xyz, rwb_from_quaternion_xyz)
-from protocol.geodesy import ecef_to_enu_rotation, ecef_to_geodetic_xyz, geodetic_to_ecef
+from protocol.geodesy import TangentPlane
 from rig_emulator.link.telemetry import units as U
 from rig_emulator.link.telemetry.attitude import thrust_fraction
 
@@ -30,25 +30,14 @@ IGNORE_POS_VEL = (mavlink.POSITION_TARGET_TYPEMASK_X_IGNORE | mavlink.POSITION_T
                   | mavlink.POSITION_TARGET_TYPEMASK_VY_IGNORE | mavlink.POSITION_TARGET_TYPEMASK_VZ_IGNORE)
 
 
-@functools.lru_cache(maxsize=8)
-def _home_frame(home) -> tuple:
-    """``ecef_to_enu_rotation`` (9-tuple, row-major) and ``geodetic_to_ecef`` (3-tuple) of
-    ``home``: what :func:`protocol.geodesy.local_enu_to_global` recomputes on every call."""
-    r = ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
-    origin = geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m)
-    return tuple(r.ravel().tolist()), tuple(origin.tolist())
+_plane = functools.lru_cache(maxsize=8)(TangentPlane)  # the home's frame, computed once per home
 
 
 def enu_to_global(home, enu):
-    """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, bit-identical: ``home``'s
-    frame computed once; ``origin + enu @ r`` in scalar math, the products summed in order from
-    +0 as numpy's vector-matrix product does (tests/rig_emulator/link/telemetry/test_position_geodesy.py);
-    the conversion back to geodetic in scalar math (:func:`protocol.geodesy.ecef_to_geodetic_xyz`)."""
-    (r00, r01, r02, r10, r11, r12, r20, r21, r22), (o0, o1, o2) = _home_frame(home)
-    e, n, u = (float(v) for v in enu)
-    return ecef_to_geodetic_xyz(o0 + (((0.0 + e * r00) + n * r10) + u * r20),
-                                o1 + (((0.0 + e * r01) + n * r11) + u * r21),
-                                o2 + (((0.0 + e * r02) + n * r12) + u * r22))
+    """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, bit-identical
+    (:class:`protocol.geodesy.TangentPlane`; tests/rig_emulator/link/telemetry/test_position_geodesy.py)."""
+    e, n, u = enu
+    return _plane(home).to_global(float(e), float(n), float(u))
 
 
 def _global(snap, ctx, position=None):
