@@ -31,15 +31,18 @@ at the default 1 kHz physics), so the flight stack is told which readings are ne
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from rig_emulator.physics import state as S
 from rig_emulator.sensors.barometer import KELVIN_AT_0C, isa_altitude, isa_pressure_temperature
 
+_QUAT, _VEL, _POS, _OMEGA = S.QUAT, S.VEL, S.POS, S.OMEGA
 
-@dataclass(frozen=True, slots=True)
-class HilReadout:
-    """One step's sensor readings and truth (SI; world ENU, body FRD)."""
+
+class HilReadout(NamedTuple):
+    """One step's sensor readings and truth (SI; world ENU, body FRD). Immutable; a named
+    tuple rather than a frozen dataclass: one is made at every flight-stack step, and a
+    frozen dataclass sets each of its fourteen fields through ``object.__setattr__``."""
 
     time_s: float
     gyro: tuple  # (3,) rad/s
@@ -81,39 +84,43 @@ def hil_readout(sim, k_prev: int, velocity_prev: tuple, home_alt_m: float) -> Hi
     """The readout after the steps ``k_prev .. sim.k - 1`` (``velocity_prev``: the virtual
     velocity at step ``k_prev``). Plain floats (tuples): it runs at every flight-stack step."""
     x = sim.x.tolist()
-    q = tuple(x[S.QUAT:S.QUAT + 4])
-    velocity = tuple(x[S.VEL:S.VEL + 3])
-    period = (sim.k - k_prev) * sim.dt
+    q = tuple(x[_QUAT:_QUAT + 4])
+    velocity = tuple(x[_VEL:_VEL + 3])
+    k = sim.k
+    dt = sim.dt
+    period = (k - k_prev) * dt
     if period > 0.0:
-        accel_w = tuple((v1 - v0) / period for v1, v0 in zip(velocity, velocity_prev))
+        v0, v1, v2 = velocity_prev
+        accel_w = ((velocity[0] - v0) / period, (velocity[1] - v1) / period, (velocity[2] - v2) / period)
     else:
         accel_w = (0.0, 0.0, 0.0)
     sp = sim.sensing.params
     if sp.simulate:
-        gyro, f_modules, mag = (tuple(row) for row in sim.sensing.state.awork.combined.tolist())
+        gyro, f_modules, mag = sim.sensing.state.awork.combined.tolist()
+        gyro, mag = tuple(gyro), tuple(mag)
         imu = sp.suite.imu
-        imu_new = sampled_between(k_prev, sim.k, imu.decim_inertial)
-        mag_new = sampled_between(k_prev, sim.k, imu.decim_mag)
+        imu_new = sampled_between(k_prev, k, imu.decim_inertial)
+        mag_new = sampled_between(k_prev, k, imu.decim_mag)
     else:
-        gyro = tuple(x[S.OMEGA:S.OMEGA + 3])
+        gyro = tuple(x[_OMEGA:_OMEGA + 3])
         f_modules = _body_from_world(q, (0.0, 0.0, sim.pp.g))
         mag = _body_from_world(q, sp.suite.imu.earth_field_W.tolist())
-        imu_new = mag_new = sim.k > k_prev
+        imu_new = mag_new = k > k_prev
     a_body = _body_from_world(q, accel_w)
-    pressure, temperature_k = isa_pressure_temperature(home_alt_m + x[S.POS + 2])
+    pressure, temperature_k = isa_pressure_temperature(home_alt_m + x[_POS + 2])
     return HilReadout(
-        time_s=sim.k * sim.dt,
-        gyro=gyro,
-        accel=(f_modules[0] + a_body[0], f_modules[1] + a_body[1], f_modules[2] + a_body[2]),
-        mag=mag,
-        imu_sampled=bool(imu_new),
-        mag_sampled=bool(mag_new),
-        pressure_pa=pressure,
-        temperature_c=temperature_k - KELVIN_AT_0C,
-        baro_altitude_m=isa_altitude(pressure),
-        position=tuple(x[S.POS:S.POS + 3]),
-        velocity=velocity,
-        acceleration=accel_w,
-        quaternion=q,
-        body_rates=tuple(x[S.OMEGA:S.OMEGA + 3]),
+        k * dt,  # time_s
+        gyro,
+        (f_modules[0] + a_body[0], f_modules[1] + a_body[1], f_modules[2] + a_body[2]),  # accel
+        mag,
+        bool(imu_new),  # imu_sampled
+        bool(mag_new),  # mag_sampled
+        pressure,  # pressure_pa
+        temperature_k - KELVIN_AT_0C,  # temperature_c
+        isa_altitude(pressure),  # baro_altitude_m
+        tuple(x[_POS:_POS + 3]),  # position
+        velocity,
+        accel_w,  # acceleration
+        q,  # quaternion
+        tuple(x[_OMEGA:_OMEGA + 3]),  # body_rates
     )

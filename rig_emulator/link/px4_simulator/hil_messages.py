@@ -61,26 +61,40 @@ def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False, pressure_d
     wrap the reading round to the opposite sign. The virtual ground stops a touchdown in one
     physics step, so a landing at 0.7 m/s reads about -18 g for one 4 ms step.
     ``pressure_dither_pa`` is added to ``abs_pressure`` (the session alternates its sign:
-    :data:`BARO_DITHER_PA`)."""
+    :data:`BARO_DITHER_PA`).
+
+    It runs at every flight-stack step: the unit helpers (``hil_units.saturate``,
+    ``step_usec``, ``hpa``, ``units.gauss``) are written out here, the same operations."""
     a, g, m = readout.accel, readout.gyro, readout.mag
-    al, gl = H.ACCEL_LIMIT_M_S2, H.GYRO_LIMIT_RAD_S
+    al, gl, gs = _ACCEL_LIMIT, _GYRO_LIMIT, _GAUSS_PER_TESLA
     return mavlink.MAVLink_hil_sensor_message(
-        time_usec=H.step_usec(readout.time_s),
-        xacc=H.saturate(float(a[0]), al), yacc=H.saturate(float(a[1]), al), zacc=H.saturate(float(a[2]), al),
-        xgyro=H.saturate(float(g[0]), gl), ygyro=H.saturate(float(g[1]), gl), zgyro=H.saturate(float(g[2]), gl),
-        xmag=U.gauss(float(m[0])), ymag=U.gauss(float(m[1])), zmag=U.gauss(float(m[2])),
-        abs_pressure=H.hpa(readout.pressure_pa + pressure_dither_pa), diff_pressure=0.0,
-        pressure_alt=float(readout.baro_altitude_m), temperature=float(readout.temperature_c),
-        fields_updated=H.FIELDS_ALL if all_fields else fields_updated(readout), id=sensor_id)
+        int(round(readout.time_s * 1e6)),  # time_usec (hil_units.step_usec)
+        min(max(float(a[0]), -al), al), min(max(float(a[1]), -al), al), min(max(float(a[2]), -al), al),
+        min(max(float(g[0]), -gl), gl), min(max(float(g[1]), -gl), gl), min(max(float(g[2]), -gl), gl),
+        float(m[0]) * gs, float(m[1]) * gs, float(m[2]) * gs,  # xmag..zmag (units.gauss)
+        (readout.pressure_pa + pressure_dither_pa) / _PA_PER_HPA,  # abs_pressure (hil_units.hpa)
+        0.0,  # diff_pressure
+        float(readout.baro_altitude_m),  # pressure_alt
+        float(readout.temperature_c),  # temperature
+        H.FIELDS_ALL if all_fields else fields_updated(readout),
+        sensor_id)
 
 
-def _geodetic(readout, plane: TangentPlane):
-    return plane.to_global(*(float(v) for v in readout.position))
+_ACCEL_LIMIT, _GYRO_LIMIT = H.ACCEL_LIMIT_M_S2, H.GYRO_LIMIT_RAD_S
+_GAUSS_PER_TESLA, _PA_PER_HPA = U.GAUSS_PER_TESLA, H.PA_PER_HPA
 
 
-def hil_gps(readout, plane: TangentPlane):
-    """HIL_GPS: the virtual position about the home of ``plane`` (3D fix, ideal)."""
-    lat, lon, alt = _geodetic(readout, plane)
+def geodetic(readout, plane: TangentPlane) -> tuple:
+    """(lat_deg, lon_deg, alt_m) of the readout's virtual position about the home of ``plane``
+    (computed once per step when HIL_GPS and HIL_STATE_QUATERNION both go)."""
+    e, n, u = readout.position
+    return plane.to_global(float(e), float(n), float(u))
+
+
+def hil_gps(readout, plane: TangentPlane, geo: tuple | None = None):
+    """HIL_GPS: the virtual position about the home of ``plane`` (3D fix, ideal); ``geo``:
+    :func:`geodetic` of the readout if already computed."""
+    lat, lon, alt = geo or geodetic(readout, plane)
     vn, ve, vd = enu_to_ned_xyz(*readout.velocity)
     speed = math.hypot(vn, ve)
     cog = U.heading_rad_to_cdeg(math.atan2(ve, vn)) if speed >= GPS_SPEED_UNKNOWN_BELOW_M_S else U.UINT16_UNKNOWN
@@ -92,19 +106,33 @@ def hil_gps(readout, plane: TangentPlane):
         satellites_visible=GPS_SATELLITES, id=0, yaw=0)
 
 
-def hil_state_quaternion(readout, plane: TangentPlane):
+def hil_state_quaternion(readout, plane: TangentPlane, geo: tuple | None = None):
     """HIL_STATE_QUATERNION: the true attitude, body rates, virtual position, velocity and
     acceleration (ground truth for the flight stack's log; the acceleration NED in milli-g
-    as common.xml gives the unit)."""
-    lat, lon, alt = _geodetic(readout, plane)
-    vn, ve, vd = enu_to_ned_xyz(*readout.velocity)
-    an, ae, ad = enu_to_ned_xyz(*readout.acceleration)
+    as common.xml gives the unit); ``geo``: :func:`geodetic` of the readout if already
+    computed. Sent at most every step: the frame and unit helpers (``enu_to_ned_xyz``,
+    ``units.deg_e7``, ``mm``, ``cm_s_i16``, ``cm_s_u16``, ``milli_g``) are written out
+    here, the same operations (``units.clamp_int`` does the rounding and saturation)."""
+    lat, lon, alt = geo or geodetic(readout, plane)
+    e, n, u = readout.velocity
+    vn, ve, vd = float(n), float(e), -float(u)
+    e, n, u = readout.acceleration
+    an, ae, ad = float(n), float(e), -float(u)
     w, x, y, z = mavlink_quaternion_from_quat_wb(readout.quaternion)
-    p, q, r = (float(v) for v in readout.body_rates)
+    p, q, r = readout.body_rates
     speed = math.sqrt(vn * vn + ve * ve + vd * vd)
+    speed_cm_s = _clamp(speed * 100.0, 0, 65534, _U16_UNKNOWN)
     return mavlink.MAVLink_hil_state_quaternion_message(
-        time_usec=H.step_usec(readout.time_s), attitude_quaternion=[w, x, y, z],
-        rollspeed=p, pitchspeed=q, yawspeed=r, lat=U.deg_e7(lat), lon=U.deg_e7(lon), alt=U.mm(alt),
-        vx=U.cm_s_i16(vn), vy=U.cm_s_i16(ve), vz=U.cm_s_i16(vd),
-        ind_airspeed=U.cm_s_u16(speed), true_airspeed=U.cm_s_u16(speed),
-        xacc=U.milli_g(an), yacc=U.milli_g(ae), zacc=U.milli_g(ad))
+        int(round(readout.time_s * 1e6)), [w, x, y, z],  # time_usec (hil_units.step_usec), attitude_quaternion
+        float(p), float(q), float(r),  # rollspeed, pitchspeed, yawspeed
+        _clamp(lat * 1e7, _I32_LO, _I32_HI), _clamp(lon * 1e7, _I32_LO, _I32_HI),  # lat, lon (degE7)
+        _clamp(alt * 1000.0, _I32_LO, _I32_HI),  # alt (mm)
+        _clamp(vn * 100.0, _I16_LO, _I16_HI), _clamp(ve * 100.0, _I16_LO, _I16_HI),  # vx, vy (cm/s)
+        _clamp(vd * 100.0, _I16_LO, _I16_HI),  # vz
+        speed_cm_s, speed_cm_s,  # ind_airspeed, true_airspeed
+        _clamp(an / _G0 * 1000.0, _I16_LO, _I16_HI), _clamp(ae / _G0 * 1000.0, _I16_LO, _I16_HI),  # x/yacc (mG)
+        _clamp(ad / _G0 * 1000.0, _I16_LO, _I16_HI))  # zacc
+
+
+_clamp = U.clamp_int
+(_I32_LO, _I32_HI), (_I16_LO, _I16_HI), _U16_UNKNOWN, _G0 = U.INT32, U.INT16, U.UINT16_UNKNOWN, U.G0

@@ -75,45 +75,61 @@ class Px4SimulatorServer:
 
     # --- the loop ---------------------------------------------------------------------------
     def run(self, duration: float | None = None) -> None:
-        """Serve until :meth:`stop`, or until a session has run ``duration`` simulated seconds."""
+        """Serve until :meth:`stop`, or until a session has run ``duration`` simulated seconds.
+
+        In lockstep an iteration is one step (the flight stack's answer read and acted on): the
+        sockets waited on are collected again only when they may have changed (after a ground
+        service, which accepts and drops ground stations, or when a session starts or ends)."""
         t_end = math.inf if duration is None else duration - 0.5 * self.plant.period_s
+        timed = duration is not None
         self._next_ground = time.monotonic()
         listening = self.transport.filenos()
+        fds = ground = None
+        fds_session = None
+        select_ = select.select
+        monotonic = time.monotonic
         while not self._stop:
-            now = time.monotonic()
+            now = monotonic()
             if now >= self._next_ground:
                 self._service_ground(now)
+                ground = None
             s = self.session
             if s is not None:
-                # what the flight stack sent first: an answer that has arrived starts lockstep before
-                # a late free-run step would (the loop may wake late on a busy machine)
-                due = s.free_run_due(now)  # once: it re-anchors the free run after a long stall
-                if due and select.select([s.conn], [], [], 0)[0]:
-                    if not s.on_readable():
-                        self._end_session()
-                        continue
-                    if s.lockstep:
-                        due = 0
-                for _ in range(due):
-                    s.step()
+                if not s.lockstep:
+                    # what the flight stack sent first: an answer that has arrived starts lockstep before
+                    # a late free-run step would (the loop may wake late on a busy machine)
+                    due = s.free_run_due(now)  # once: it re-anchors the free run after a long stall
+                    if due and select_([s.conn], [], [], 0)[0]:
+                        if not s.on_readable():
+                            self._end_session()
+                            continue
+                        if s.lockstep:
+                            due = 0
+                    for _ in range(due):
+                        s.step()
                 if not s.conn.open:
                     self._end_session()
                     continue
             elif not listening:  # a serial line: open it (again) when it can be
                 self._accept()
-            if self.session is not None and self.plant.time_s >= t_end:
-                break
             s = self.session
-            ground = self._ground_sockets()
-            fds = ground + listening + ([s.conn] if s is not None else [])
-            timeout = max(self._next_ground - now, 0.0)
+            if timed and s is not None and self.plant.time_s >= t_end:
+                break
+            if ground is None or fds_session is not s:
+                ground = self._ground_sockets()
+                fds = ground + listening + ([s.conn] if s is not None else [])
+                fds_session = s
+            timeout = self._next_ground - now
+            if timeout < 0.0:
+                timeout = 0.0
             if s is not None:
-                free = s.next_free_run_in(now)
-                if free is not None:
-                    timeout = min(timeout, free)
+                if not s.lockstep:
+                    free = s.next_free_run_in(now)
+                    if free is not None and free < timeout:
+                        timeout = free
             elif not listening:
                 timeout = min(timeout, 0.05)
-            readable = select.select(fds, [], [], timeout)[0]
+            readable = select_(fds, [], [], timeout)[0]
             if not readable:
                 continue
             # the session first: a flight stack that closed and reconnected at once is over before the new one
@@ -121,8 +137,9 @@ class Px4SimulatorServer:
                 self._end_session()
             if listening and listening[0] in readable:
                 self._accept()
-            if any(sock in readable for sock in ground):
-                self._service_ground(time.monotonic())
+            if ground and any(sock in readable for sock in ground):
+                self._service_ground(monotonic())
+                ground = None
         if self.session is not None:
             self._end_session()
 

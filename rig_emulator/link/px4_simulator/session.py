@@ -166,10 +166,13 @@ class SimulatorSession:
         self.counters.steps += self.plant.steps_per_update
         dither = hil_messages.BARO_DITHER_PA if self.steps % 2 else -hil_messages.BARO_DITHER_PA
         out = [self._pack(hil_messages.hil_sensor(readout, all_fields=self.all_fields, pressure_dither_pa=dither))]
-        if self.steps % self.gps_div == 0:
-            out.append(self._pack(hil_messages.hil_gps(readout, self.plane)))
-        if self._state_due(hil_units.step_usec(readout.time_s)):
-            out.append(self._pack(hil_messages.hil_state_quaternion(readout, self.plane)))
+        gps = self.steps % self.gps_div == 0
+        state = self._state_due(hil_units.step_usec(readout.time_s))
+        geo = hil_messages.geodetic(readout, self.plane) if gps and state else None  # once for both
+        if gps:
+            out.append(self._pack(hil_messages.hil_gps(readout, self.plane, geo)))
+        if state:
+            out.append(self._pack(hil_messages.hil_state_quaternion(readout, self.plane, geo)))
         self._write(out)
 
     def _state_due(self, t_us: int) -> bool:
