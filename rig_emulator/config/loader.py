@@ -283,12 +283,20 @@ def _validate_over(base: RigConfig, overrides: Mapping[str, Any], copy_base: boo
     return out
 
 
+THRUST_LOOP_MIN_TIME_CONSTANT = 1.0  # s: the load-cell thrust loop is slow against the 50 ms motor lag and 80 ms IIR
+
+
 def _cross_checks(out: RigConfig) -> None:
     physics = out["sim.physics_rate_hz"]
     for key in ("sim.control_rate_hz", "sim.log_rate_hz"):
         if out[key] > physics:
             raise ConfigError(f"{key} = {out[key]:g}: must not exceed sim.physics_rate_hz = {physics:g}")
         _divisor(key, out[key], physics)
+    tc = out["motors.thrust_loop_time_constant"]
+    if 0.0 < tc < THRUST_LOOP_MIN_TIME_CONSTANT:
+        raise ConfigError(f"motors.thrust_loop_time_constant = {tc:g}: must be 0 (open loop) or in "
+                          f"[{THRUST_LOOP_MIN_TIME_CONSTANT:g}, 10000] s (a slow loop against the motor lag and the "
+                          "load-cell filter)")
     if out["guidance.type"] == "waypoints" and not out["guidance.waypoints"]:
         raise ConfigError("guidance.waypoints: guidance.type = 'waypoints' needs at least one waypoint")
 
