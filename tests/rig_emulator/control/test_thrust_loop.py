@@ -35,10 +35,13 @@ def _run(cp, seconds, f_des, true_thrust, flagged=0, cstate=None):
     return meas, cstate, v
 
 
-def test_off_by_default_on_both_plants():
+def test_off_on_the_ideal_plant_on_the_hardware_rig():
     assert IDEAL["motors.thrust_loop_time_constant"] == 0.0
-    assert load_config("hilms")["motors.thrust_loop_time_constant"] == 0.0
     assert control_params(IDEAL).thrust_loop_rate == 0.0
+    hw = load_config("hilms")
+    assert hw["motors.thrust_loop_time_constant"] == 200.0
+    assert control_params(hw).thrust_loop_rate == pytest.approx(1.0 / 200.0)
+    assert control_params(hw).thrust_loop_limit == pytest.approx(100.0 * GRAM_FORCE_N)
 
 
 @pytest.mark.parametrize("tc", [5.0, 20.0])
@@ -108,3 +111,13 @@ def test_closed_on_the_hardware_rig_the_collective_thrust_error_goes():
         gaps.append(float(np.mean(log[late, L.U] - meas)))
     assert gaps[0] > 1.0  # open: about 4 x 50 gr.F = 1.96 N less the convex curve's part
     assert abs(gaps[1]) < 0.05
+
+
+def test_identify_fits_the_time_constant_only_outside_the_refused_hole():
+    from gcs_tools.identify.params import make_param
+    from rig_emulator.config.loader import ConfigError
+
+    p = make_param("motors.thrust_loop_time_constant", 20.0, 1000.0)
+    assert (p.lo, p.hi) == (20.0, 1000.0)
+    with pytest.raises(ConfigError, match="refused interval"):
+        make_param("motors.thrust_loop_time_constant", 0.0, 200.0)
