@@ -39,7 +39,7 @@ from rig_emulator.control.controller import (
     REF_VEL,
     control_update,
 )
-from rig_emulator.control.plugin_layout import P_NONE
+from rig_emulator.control.plugin_layout import K_VOLTAGES, P_NONE
 from rig_emulator.control.plugin_step import plugin_control
 from rig_emulator.control.thrust_loop import thrust_loop
 from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
@@ -143,6 +143,10 @@ def run_steps(
                     if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                                           ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
                         armed = False  # the plug-in failed: motors off from the next step (pl.status says why)
+                    elif cp.thrust_loop_rate > 0.0 and sp.simulate and pl.kind != K_VOLTAGES:
+                        # the firmware's thrust loop acts on whatever went through its Eq. 40 inverse
+                        # (a plug-in's voltages bypass it)
+                        thrust_loop(ctrl_dt, cp, cstate, cout, ss.thrust_est, us.flags[F_CELLS], v_cmd)
             if k % up.div == 0 and supervise(t, armed, sp.simulate, sp.estimated, phi, theta, wx, wy, wz, cout,
                                              ss.awork.ensemble.rejected, ss.awork.combined, ss.health[1], up, us):
                 armed = False  # the failsafe cuts the motors from the next step on
