@@ -124,6 +124,13 @@ SCHEMA: dict[str, Spec] = {
                                 "gr.F", 0.0, 2000.0),
     "motors.command_steps": I("ESC command resolution: levels over 0..voltage_max (0 = continuous)", 0, 1_000_000),
     "motors.esc_deadband_v": F("ESC dead-band: voltage commands below this give 0 V (0 = none)", "V", 0.0, 10.0),
+    "motors.thrust_loop_time_constant": F("the firmware's load-cell thrust loop (a reading of Sec. 3-3, "
+                                          "control/thrust_loop.py): time constant at which each motor's correction "
+                                          "removes the error between its desired and its filtered load-cell thrust; "
+                                          "0 = open loop (Eq. 40 inverse alone); else at least 1 s (a slow loop)",
+                                          "s", 0.0, 1e4),
+    "motors.thrust_loop_limit_grf": F("bound on each motor's thrust-loop correction (a stuck or dead load cell "
+                                      "cannot drive it further)", "gr.F", 0.0, 850.0),
     "motors.kv_rpm_per_v": F("motor velocity constant KV (Sec. 4: 750 KV); sizes the current the motors draw "
                              "from the bench supply (physics/electrical.py)", "rpm/V", 1.0, 1e5),
     # --- control ---------------------------------------------------------------------------

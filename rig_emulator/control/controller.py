@@ -57,7 +57,8 @@ CS_STARTED = 16  # 1: 0 until the first update has initialised the filters
 # actuator test, not controller state: DO_MOTOR_TEST spins motors while disarmed (simulation/live.py motor_test)
 CS_TEST_V = 17  # 4: voltage commanded to each motor during the test
 CS_TEST_UNTIL = 21  # 1: the test ends at this time (s)
-CS_SIZE = 22
+CS_THRUST_CORR = 22  # 4: the load-cell thrust loop's correction per motor (N; control/thrust_loop.py)
+CS_SIZE = 26
 
 # controller output
 OUT_U = 0  # 4: u1 (N), u2, u3, u4 (N m, body axes, as allocated)

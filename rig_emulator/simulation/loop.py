@@ -23,7 +23,7 @@ previous step's first RK4 stage.
 """
 
 from rig_emulator._jit import jit
-from rig_emulator.control.supervisor import F_FAILSAFE, F_INVALID, supervise
+from rig_emulator.control.supervisor import F_CELLS, F_FAILSAFE, F_INVALID, supervise
 from rig_emulator.control.controller import (
     CS_STARTED,
     CS_TEST_UNTIL,
@@ -39,8 +39,9 @@ from rig_emulator.control.controller import (
     REF_VEL,
     control_update,
 )
-from rig_emulator.control.plugin_layout import P_NONE
+from rig_emulator.control.plugin_layout import K_VOLTAGES, P_NONE
 from rig_emulator.control.plugin_step import plugin_control
+from rig_emulator.control.thrust_loop import thrust_loop
 from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
 from rig_emulator.estimation.load_cell_filter import load_cell_filter_step
 from rig_emulator.estimation.onboard_position import onboard_translation_step
@@ -135,11 +136,17 @@ def run_steps(
                         ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                         ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
                     )
+                    if cp.thrust_loop_rate > 0.0 and sp.simulate:  # issue 13: Sec. 3-3's load-cell thrust loop
+                        thrust_loop(ctrl_dt, cp, cstate, cout, ss.thrust_est, us.flags[F_CELLS], v_cmd)
                 elif pfn is not None:  # a controller plug-in (issue 16); without one (P_EXTERNAL: v_cmd set from outside)
                     # pfn is None, and numba drops this branch and never compiles the plug-in path (issue 14)
                     if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                                           ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
                         armed = False  # the plug-in failed: motors off from the next step (pl.status says why)
+                    elif cp.thrust_loop_rate > 0.0 and sp.simulate and pl.kind != K_VOLTAGES:
+                        # the firmware's thrust loop acts on whatever went through its Eq. 40 inverse
+                        # (a plug-in's voltages bypass it)
+                        thrust_loop(ctrl_dt, cp, cstate, cout, ss.thrust_est, us.flags[F_CELLS], v_cmd)
             if k % up.div == 0 and supervise(t, armed, sp.simulate, sp.estimated, phi, theta, wx, wy, wz, cout,
                                              ss.awork.ensemble.rejected, ss.awork.combined, ss.health[1], up, us):
                 armed = False  # the failsafe cuts the motors from the next step on

@@ -34,7 +34,8 @@ ControlParams = namedtuple(
     "pos_law att_law mass g ixx iyy izz arm_length rotor_inertia km_over_kf kf k_v v_max f_max "
     "max_tilt ref_omega smc_k smc_lam smc_boundary smc_phi smcp_k smcp_lam smcp_phi "
     "flc_phi flc_theta flc_psi flc_x flc_y flc_z rule_table flc_rate_share "
-    "pida_kp pida_ki pida_kd pidp_kp pidp_ki pidp_kd pid_limit",
+    "pida_kp pida_ki pida_kd pidp_kp pidp_ki pidp_kd pid_limit "
+    "thrust_loop_rate thrust_loop_limit",  # the load-cell thrust loop (control/thrust_loop.py): 1/T (0 = off), N
 )
 
 GuidanceParams = namedtuple(
@@ -204,6 +205,12 @@ def smc_gains_si(cfg: RigConfig, ixx: float, iyy: float, izz: float, arm_length:
     return _arr(k), _arr(lam)
 
 
+def _thrust_loop_rate(cfg: RigConfig) -> float:
+    """1 / ``motors.thrust_loop_time_constant`` (1/s), 0 with the loop off (time constant 0)."""
+    tc = cfg["motors.thrust_loop_time_constant"]
+    return 1.0 / tc if tc > 0.0 else 0.0
+
+
 def control_params(cfg: RigConfig) -> ControlParams:
     """The controllers' arguments: what the firmware believes (its model, ``controller_model.*``)."""
     pp = physics_params(cfg)
@@ -248,6 +255,8 @@ def control_params(cfg: RigConfig) -> ControlParams:
         pidp_ki=_arr(cfg["pid.position_ki"]),
         pidp_kd=_arr(cfg["pid.position_kd"]),
         pid_limit=cfg["pid.integral_limit"],
+        thrust_loop_rate=_thrust_loop_rate(cfg),
+        thrust_loop_limit=cfg["motors.thrust_loop_limit_grf"] * GRAM_FORCE_N,
         **_flc_axes(cfg),
     )
 

@@ -135,6 +135,8 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "motors.curve_pivot_grf": ("MOT_CURVE_PV", None),
     "motors.command_steps": ("MOT_CMD_STEPS", None),
     "motors.esc_deadband_v": ("MOT_DEADBAND", None),
+    "motors.thrust_loop_time_constant": ("MOT_TLOOP_T", None),
+    "motors.thrust_loop_limit_grf": ("MOT_TLOOP_LIM", None),
     "control.actuation_delay": ("CTL_DELAY", None),
     "controller_model.inertia_scale": ("MDL_I", ATT),
     "controller_model.arm_length_scale": ("MDL_ARM", None),

@@ -53,6 +53,9 @@ def test_every_scenario_preset_loads():
         ("vibration.blades", 0, ["vibration.blades", "[1, 8]"]),
         ("controller_model.inertia_scale", [1.0, 0.0, 1.0], ["controller_model.inertia_scale[1]"]),
         ("flc.position_rate_share", 1.5, ["flc.position_rate_share", "[0, 1]"]),
+        ("motors.thrust_loop_time_constant", -1.0, ["motors.thrust_loop_time_constant", "[0, 10000] s"]),
+        ("motors.thrust_loop_time_constant", 0.5, ["motors.thrust_loop_time_constant", "must be 0 (open loop)"]),
+        ("motors.thrust_loop_limit_grf", 900.0, ["motors.thrust_loop_limit_grf", "[0, 850] gr.F"]),
     ],
 )
 def test_bad_values_name_the_key_and_range(key, value, words):
