@@ -110,14 +110,15 @@ class Channel:
 
     def send(self, msg) -> None:
         """Encode ``msg`` with this peer's sequence number (and signature) and hand it to the endpoint."""
+        mav = self.mav
         if self.signing is not None:
-            self.signing.stamp(self.mav)
+            self.signing.stamp(mav)
         try:
-            buf = msg.pack(self.mav)
+            buf = msg.pack(mav)
         except OverflowError:  # a finite value beyond float32 (a diverged simulation): sent as +-inf
-            buf = saturate_floats(msg).pack(self.mav)
-        self.mav.seq = (self.mav.seq + 1) % 256
-        if self.endpoint.send(self.key, bytes(buf)):
+            buf = saturate_floats(msg).pack(mav)
+        mav.seq = (mav.seq + 1) % 256
+        if self.endpoint.send(self.key, buf if type(buf) is bytes else bytes(buf)):
             self.counters.sent += 1
         else:
             self.counters.drop("tx_overflow")

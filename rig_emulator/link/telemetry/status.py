@@ -140,11 +140,14 @@ def system_time(snap, ctx):
     return M.MAVLink_system_time_message(time_unix_usec=U.unix_usec(time.time()), time_boot_ms=U.time_boot_ms(snap.stamp_us))
 
 
+SERVO_FIELDS = tuple(f"servo{i + 1}_raw" for i in range(16))
+
+
 def servo_output_raw(snap, ctx):
     v_max = ctx.cfg["motors.voltage_max"]
     pwm = [U.pwm_us(v, v_max) for v in snap.voltage_commands] + [0] * 12
-    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.stamp_us), port=0, **{
-        f"servo{i + 1}_raw": pwm[i] for i in range(16)})
+    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.stamp_us), port=0,
+                                              **dict(zip(SERVO_FIELDS, pwm)))
 
 
 def autopilot_version(snap, ctx):
