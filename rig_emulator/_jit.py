@@ -142,7 +142,6 @@ def jit(*args, nrt=True, python=None, **kwargs):
     kwargs.setdefault("cache", True)
     kwargs.setdefault("fastmath", False)
     kwargs.setdefault("no_cfunc_wrapper", True)
-    kwargs.setdefault("forceinline", False)  # numba would inherit it from the first caller otherwise
     kwargs["_nrt"] = bool(nrt)  # numba's own name for the option
     if python is None:
         python = bool(nrt) or kwargs.get("inline") == "always"

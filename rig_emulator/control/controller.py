@@ -86,7 +86,7 @@ def _axis_errors(ref, k, pos, vel):
 # hardware-rig); its stages are inlined into it: a call passed cp (ControlParams) and the other
 # arguments field by field at every control step. They are also inlined into the plug-in path
 # (control/plugin_step.py), so a rig with a plug-in types them once more (one without prunes it)
-@jit(nrt=False, forceinline=True)
+@jit(nrt=False)
 def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, ref, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
     """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays.
 
@@ -102,7 +102,7 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
     return actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd)
 
 
-@jit(nrt=False, forceinline=True)  # see the note above control_update
+@jit(inline="always")  # see the note above control_update
 def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
     """Position law (or, in attitude mode, the guidance's attitude references and u1 = m g).
 
@@ -202,7 +202,7 @@ def shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate):
     return r0, dr0, a0, r1, dr1, a1, r2, dr2, a2
 
 
-@jit(nrt=False, forceinline=True)  # see the note above control_update
+@jit(inline="always")  # see the note above control_update
 def attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
                    cp, cstate, e3, de3, acc3, s3, tau3):
     """Attitude law: Euler-frame torques into ``tau3``, sliding surfaces into ``s3``."""
@@ -236,7 +236,7 @@ def attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0,
             tau3[2] = cp.izz * pid_axis(e3[2], de3[2], a2, cp.pida_kp[2], cp.pida_ki[2], cp.pida_kd[2], integ, np.int64(2), dt, cp.pid_limit)
 
 
-@jit(nrt=False, forceinline=True)  # see the note above control_update
+@jit(inline="always")  # see the note above control_update
 def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd):
     """Allocation (A6 inverse) of (u1 N, u2..u4 N m about the body axes) to motor thrusts and
     voltages; records what was decided in ``cout``. Returns the flags."""
@@ -249,7 +249,7 @@ def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, co
     return flags
 
 
-@jit(nrt=False, forceinline=True)  # see the note above control_update
+@jit(inline="always")  # see the note above control_update
 def record_decision(forces, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cout):
     """Record in ``cout`` what the controller decided: u1..u4 of the motor thrusts ``forces``
     (A6), the attitude references, the sliding surfaces ``s3`` and the flags (shared by the

@@ -6,7 +6,7 @@ from rig_emulator.physics.rigid_body import state_derivative
 from rig_emulator.physics.rotation import quat_normalize
 
 
-@jit(nrt=False, forceinline=True)  # one call site (the step loop): see the note below
+@jit(inline="always")  # one call site (the step loop): see the note below
 def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     """Advance ``x`` in place by one RK4 step of length ``h``.
 

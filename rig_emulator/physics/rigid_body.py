@@ -25,7 +25,7 @@ from rig_emulator.physics.motors import rotor_speed
 from rig_emulator.physics.rotation import quat_derivative, quat_to_rot
 
 
-@jit(nrt=False, forceinline=True)  # into rk4_step, once (physics/integrator.py: the cost of a call with p)
+@jit(inline="always")  # into rk4_step, once (physics/integrator.py: the cost of a call with p)
 def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
     """dx = f(t, x) for the rig; ``p`` is a PhysicsParams namedtuple, ``R`` a 3x3 work array."""
     q0 = x[6]

@@ -65,7 +65,7 @@ def allocate_raw(suite: SensorSuite) -> tuple[np.ndarray, np.ndarray]:
 
 # inlined into the step loop's _sense (its one call site there): a call passes suite and state field by
 # field every step (simulation/loop.py)
-@jit(nrt=False, forceinline=True)
+@jit(inline="always")
 def sensors_step(step_index, q, omega_B, omega_dot_B, thrust_N, rotor_speed_rad_s, suite, state, rng,
                  imu_raw_out, cell_raw_out):
     """Sample whatever is due at ``step_index``; returns the bit mask of fresh sensors."""

@@ -56,7 +56,7 @@ from rig_emulator.simulation.rng_bits import generator
 
 
 # inlined: one call site, and a call passes pp, sp and ss field by field (hundreds of values) every step
-@jit(nrt=False, forceinline=True)
+@jit(inline="always")
 def _sense(k, x, pp, sp, ss, rng, omega_dot):
     """Sample the sensors due at step k and run the estimators on them."""
     if k % sp.suite.cells.decim == 0:  # the load cells need the motors' thrusts and speeds
