@@ -43,6 +43,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import threading
 import types
 from pathlib import Path
 
@@ -104,6 +105,43 @@ numba.config.CACHE_DIR = CACHE_DIR
 _prune(CACHE_DIR)
 
 
+def _in_large_frame(fn, args, kwargs):
+    return fn(*args, **kwargs)
+
+
+# CPython (3.11+) keeps its frames in 16 KiB chunks of a per-thread stack, mapped when the stack
+# grows into one and unmapped as soon as it returns out of it. numba's compiler recurses deeply and
+# its depth swings across such boundaries all the time: in a cold compile of the step loop that was
+# about 0.55 million page faults (84 % of all, in _PyThreadState_BumpFramePointerSlow; perf) and
+# about 5 s of system time (benchmarks/README.md, "Cold compile"). A compile therefore starts in a
+# frame whose (never touched) stack reservation makes CPython give it a 2 MiB chunk; the compiler's
+# frames then live in the rest of that chunk, which stays mapped until the compile returns.
+_in_large_frame.__code__ = _in_large_frame.__code__.replace(
+    co_stacksize=_in_large_frame.__code__.co_stacksize + (1 << 17))
+_compiling = threading.local()
+
+
+def _outermost(fn, args, kwargs):
+    if getattr(_compiling, "active", False):
+        return fn(*args, **kwargs)
+    _compiling.active = True
+    try:
+        return _in_large_frame(fn, args, kwargs)
+    finally:
+        _compiling.active = False
+
+
+class _LargeFrame:
+    """Mixin of every dispatcher made by :func:`jit`: compiles (and cache loads) start in a large
+    frame (see :func:`_in_large_frame`); the compiled code is the same."""
+
+    def compile(self, sig):
+        return _outermost(super().compile, (sig,), {})
+
+    def _compile_for_args(self, *args, **kws):
+        return _outermost(super()._compile_for_args, args, kws)
+
+
 class _LoopOnly:
     """Mixin of a dispatcher compiled without numba's CPython wrapper (see :func:`jit`)."""
 
@@ -150,8 +188,8 @@ def jit(*args, nrt=True, python=None, **kwargs):
 
     def wrap(f):
         d = numba.njit(**kwargs)(f)
+        d.__class__ = _dispatcher_class(type(d), loop_only=not python)
         if not python:
-            d.__class__ = _loop_only_class(type(d))
             d._cache_twin = bool(kwargs["cache"])
         return d
 
@@ -162,11 +200,14 @@ def jit(*args, nrt=True, python=None, **kwargs):
     return wrap
 
 
-_LOOP_ONLY: dict = {}
+_CLASSES: dict = {}
 
 
-def _loop_only_class(cls):
-    sub = _LOOP_ONLY.get(cls)
+def _dispatcher_class(cls, loop_only):
+    sub = _CLASSES.get((cls, loop_only))
     if sub is None:
-        sub = _LOOP_ONLY[cls] = type("LoopOnly" + cls.__name__, (_LoopOnly, cls), {"__module__": __name__})
+        name = ("LoopOnly" if loop_only else "LargeFrame") + cls.__name__
+        bases = (_LoopOnly, _LargeFrame, cls) if loop_only else (_LargeFrame, cls)
+        sub = _CLASSES[(cls, loop_only)] = type(name, bases, {"__module__": __name__, "__qualname__": name})
+        globals()[name] = sub  # importable by name, as pickle finds a class
     return sub
