@@ -38,7 +38,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from rig_emulator.config.loader import REFUSED_GAPS, ConfigError, check_value, refused_gap_message
+from rig_emulator.config.loader import ConfigError, check_value
 from rig_emulator.config.schema import SCHEMA, Spec
 
 _KEY = re.compile(r"^(?P<base>[A-Za-z0-9_.]+?)(?:\[(?P<index>\d+(?:,\d+)*)\](?:\.(?P<field>[A-Za-z0-9_]+))?)?$")
@@ -237,10 +237,11 @@ def make_param(key: str, lo: Any, hi: Any, start: Any = None, prior: Any = None,
         raise ConfigError(f"{label}: lower bound {lo_v:g} must be below the upper bound {hi_v:g}")
     pk.check(lo_v, f"{label}: lower bound")
     pk.check(hi_v, f"{label}: upper bound")
-    gap = REFUSED_GAPS.get(pk.base) if pk.kind == "scalar" else None
-    if gap is not None and lo_v < gap[1] and hi_v > gap[0]:  # a fit must not propose a value inside the hole
-        raise ConfigError(f"{label}: bounds [{lo_v:g}, {hi_v:g}] meet the refused interval ({gap[0]:g}, {gap[1]:g}) "
-                          f"({refused_gap_message(pk.base, 0.5 * (gap[0] + gap[1]))}); fit within [{gap[1]:g}, ...]")
+    spec = pk.spec
+    if spec is not None and spec.gap_to is not None and lo_v < spec.gap_to and hi_v > spec.lo:
+        # a fit must not propose a value inside the key's refused hole
+        raise ConfigError(f"{label}: bounds [{lo_v:g}, {hi_v:g}] meet the refused interval ({spec.lo:g}, "
+                          f"{spec.gap_to:g}) ({pk.base} must be {spec.describe_gap()}); fit within [{spec.gap_to:g}, ...]")
     st = None
     if start is not None:
         st = _number(start, f"{label}: start")

@@ -130,6 +130,9 @@ def _check_number(key: str, spec: Spec, value: Any, integer: bool) -> float | in
     if below or value > spec.hi:
         unit = f" {spec.unit}" if spec.unit else ""
         raise ConfigError(f"{key} = {value!r}: must be {spec.describe_range()}{unit}")
+    if spec.in_gap(value):
+        unit = f" {spec.unit}" if spec.unit else ""
+        raise ConfigError(f"{key} = {value!r}: must be {spec.describe_gap()}{unit}")
     return int(value) if integer else float(value)
 
 
@@ -283,31 +286,12 @@ def _validate_over(base: RigConfig, overrides: Mapping[str, Any], copy_base: boo
     return out
 
 
-THRUST_LOOP_MIN_TIME_CONSTANT = 1.0  # s: the load-cell thrust loop is slow against the 50 ms motor lag and 80 ms IIR
-
-#: keys whose schema range has a hole: values strictly inside (lo, hi) are refused (0 means "off")
-REFUSED_GAPS = {"motors.thrust_loop_time_constant": (0.0, THRUST_LOOP_MIN_TIME_CONSTANT)}
-
-
-def refused_gap_message(key: str, value: float) -> str | None:
-    """Why ``value`` of ``key`` falls in the key's refused gap (:data:`REFUSED_GAPS`), else None."""
-    gap = REFUSED_GAPS.get(key)
-    if gap is None or not gap[0] < value < gap[1]:
-        return None
-    return (f"{key} = {value:g}: must be 0 (open loop) or in [{gap[1]:g}, {SCHEMA[key].hi:g}] s (a slow loop "
-            "against the motor lag and the load-cell filter)")
-
-
 def _cross_checks(out: RigConfig) -> None:
     physics = out["sim.physics_rate_hz"]
     for key in ("sim.control_rate_hz", "sim.log_rate_hz"):
         if out[key] > physics:
             raise ConfigError(f"{key} = {out[key]:g}: must not exceed sim.physics_rate_hz = {physics:g}")
         _divisor(key, out[key], physics)
-    for key in REFUSED_GAPS:
-        msg = refused_gap_message(key, out[key])
-        if msg:
-            raise ConfigError(msg)
     if out["guidance.type"] == "waypoints" and not out["guidance.waypoints"]:
         raise ConfigError("guidance.waypoints: guidance.type = 'waypoints' needs at least one waypoint")
 

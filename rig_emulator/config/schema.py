@@ -29,6 +29,10 @@ class Spec:
     length: int | None = None
     item: dict[str, "Spec"] = field(default_factory=dict)
     values: str = ""  # what a free-form value may be, in words (strings without choices, special lists)
+    # a number's refused hole inside [lo, hi]: values strictly between ``lo`` and ``gap_to`` are refused
+    # (``lo`` itself means "off", in the words of ``off``); None: no hole
+    gap_to: float | None = None
+    off: str = ""
 
     def describe_range(self) -> str:
         """The allowed interval of a number (or the choices of a string), as error messages quote it."""
@@ -36,6 +40,14 @@ class Spec:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         lo = "(" if self.lo_open else "["
         return f"in {lo}{self._bound(self.lo)}, {self._bound(self.hi)}]"
+
+    def in_gap(self, value: float) -> bool:
+        """Whether ``value`` falls in the refused hole between ``lo`` (off) and ``gap_to``."""
+        return self.gap_to is not None and self.lo < value < self.gap_to
+
+    def describe_gap(self) -> str:
+        """The values allowed around the hole (``0 (open loop) or in [1, 10000]``)."""
+        return f"{self._bound(self.lo)} ({self.off}) or in [{self._bound(self.gap_to)}, {self._bound(self.hi)}]"
 
     def _bound(self, v: float) -> str:
         return str(int(v)) if self.kind == "int" and math.isfinite(v) else f"{v:g}"
@@ -57,6 +69,8 @@ class Spec:
         if self.kind == "table_list":
             return "a list of tables, each with the fields below"
         number = "any finite number" if math.isinf(self.lo) and math.isinf(self.hi) else self.describe_range()
+        if self.gap_to is not None:
+            number = self.describe_gap()
         if self.kind == "int":
             return "an integer " + number if number.startswith("in ") else "any integer"
         if self.kind in ("vec3", "floats"):
@@ -65,8 +79,8 @@ class Spec:
         return number
 
 
-def F(doc, unit="", lo=-math.inf, hi=math.inf, lo_open=False):
-    return Spec("float", doc, unit, lo, hi, lo_open)
+def F(doc, unit="", lo=-math.inf, hi=math.inf, lo_open=False, gap_to=None, off=""):
+    return Spec("float", doc, unit, lo, hi, lo_open, gap_to=gap_to, off=off)
 
 
 def I(doc, lo=-math.inf, hi=math.inf):  # noqa: E743 - short constructor names keep the table readable
@@ -127,8 +141,9 @@ SCHEMA: dict[str, Spec] = {
     "motors.thrust_loop_time_constant": F("the firmware's load-cell thrust loop (a reading of Sec. 3-3, "
                                           "control/thrust_loop.py): time constant at which each motor's correction "
                                           "removes the error between its desired and its filtered load-cell thrust; "
-                                          "0 = open loop (Eq. 40 inverse alone); else at least 1 s (a slow loop)",
-                                          "s", 0.0, 1e4),
+                                          "0 = open loop (Eq. 40 inverse alone); else at least 1 s (a slow loop "
+                                          "against the 50 ms motor lag and the 80 ms load-cell filter)",
+                                          "s", 0.0, 1e4, gap_to=1.0, off="open loop"),
     "motors.thrust_loop_limit_grf": F("bound on each motor's thrust-loop correction (a stuck or dead load cell "
                                       "cannot drive it further)", "gr.F", 0.0, 850.0),
     "motors.kv_rpm_per_v": F("motor velocity constant KV (Sec. 4: 750 KV); sizes the current the motors draw "

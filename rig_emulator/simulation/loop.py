@@ -131,22 +131,22 @@ def run_steps(
                 wz = x[12]
             if armed:
                 guidance_update(t, pos, gp, gstate, reached_t, ref)
+                eq40 = False  # did the motor commands go through the firmware's Eq. 40 inverse?
                 if pl.mode == P_NONE:  # the built-in strategy
                     control_update(
                         ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                         ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
                     )
-                    if cp.thrust_loop_rate > 0.0 and sp.simulate:  # issue 13: Sec. 3-3's load-cell thrust loop
-                        thrust_loop(ctrl_dt, cp, cstate, cout, ss.thrust_est, us.flags[F_CELLS], v_cmd)
+                    eq40 = True
                 elif pfn is not None:  # a controller plug-in (issue 16); without one (P_EXTERNAL: v_cmd set from outside)
                     # pfn is None, and numba drops this branch and never compiles the plug-in path (issue 14)
                     if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                                           ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
                         armed = False  # the plug-in failed: motors off from the next step (pl.status says why)
-                    elif cp.thrust_loop_rate > 0.0 and sp.simulate and pl.kind != K_VOLTAGES:
-                        # the firmware's thrust loop acts on whatever went through its Eq. 40 inverse
-                        # (a plug-in's voltages bypass it)
-                        thrust_loop(ctrl_dt, cp, cstate, cout, ss.thrust_est, us.flags[F_CELLS], v_cmd)
+                    else:
+                        eq40 = pl.kind != K_VOLTAGES  # a plug-in's voltages bypass it
+                if eq40 and cp.thrust_loop_rate > 0.0 and sp.simulate:  # issue 13: Sec. 3-3's load-cell thrust loop
+                    thrust_loop(ctrl_dt, cp, cstate, cout, ss.thrust_est, us.flags[F_CELLS], v_cmd)
             if k % up.div == 0 and supervise(t, armed, sp.simulate, sp.estimated, phi, theta, wx, wy, wz, cout,
                                              ss.awork.ensemble.rejected, ss.awork.combined, ss.health[1], up, us):
                 armed = False  # the failsafe cuts the motors from the next step on

@@ -63,25 +63,22 @@ def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False, pressure_d
     ``pressure_dither_pa`` is added to ``abs_pressure`` (the session alternates its sign:
     :data:`BARO_DITHER_PA`).
 
-    It runs at every flight-stack step: the unit helpers (``hil_units.saturate``,
-    ``step_usec``, ``hpa``, ``units.gauss``) are written out here, the same operations."""
+    It runs at every flight-stack step: positional fields (the keyword form costs pymavlink's
+    constructor a dictionary per message), the units from their one place (``hil_units``,
+    ``units``)."""
     a, g, m = readout.accel, readout.gyro, readout.mag
-    al, gl, gs = _ACCEL_LIMIT, _GYRO_LIMIT, _GAUSS_PER_TESLA
+    al, gl, sat, gauss = H.ACCEL_LIMIT_M_S2, H.GYRO_LIMIT_RAD_S, H.saturate, U.gauss
     return mavlink.MAVLink_hil_sensor_message(
-        int(round(readout.time_s * 1e6)),  # time_usec (hil_units.step_usec)
-        min(max(float(a[0]), -al), al), min(max(float(a[1]), -al), al), min(max(float(a[2]), -al), al),
-        min(max(float(g[0]), -gl), gl), min(max(float(g[1]), -gl), gl), min(max(float(g[2]), -gl), gl),
-        float(m[0]) * gs, float(m[1]) * gs, float(m[2]) * gs,  # xmag..zmag (units.gauss)
-        (readout.pressure_pa + pressure_dither_pa) / _PA_PER_HPA,  # abs_pressure (hil_units.hpa)
+        H.step_usec(readout.time_s),  # time_usec
+        sat(float(a[0]), al), sat(float(a[1]), al), sat(float(a[2]), al),  # xacc..zacc
+        sat(float(g[0]), gl), sat(float(g[1]), gl), sat(float(g[2]), gl),  # xgyro..zgyro
+        gauss(float(m[0])), gauss(float(m[1])), gauss(float(m[2])),  # xmag..zmag
+        H.hpa(readout.pressure_pa + pressure_dither_pa),  # abs_pressure
         0.0,  # diff_pressure
         float(readout.baro_altitude_m),  # pressure_alt
         float(readout.temperature_c),  # temperature
         H.FIELDS_ALL if all_fields else fields_updated(readout),
         sensor_id)
-
-
-_ACCEL_LIMIT, _GYRO_LIMIT = H.ACCEL_LIMIT_M_S2, H.GYRO_LIMIT_RAD_S
-_GAUSS_PER_TESLA, _PA_PER_HPA = U.GAUSS_PER_TESLA, H.PA_PER_HPA
 
 
 def geodetic(readout, plane: TangentPlane) -> tuple:
@@ -110,29 +107,18 @@ def hil_state_quaternion(readout, plane: TangentPlane, geo: tuple | None = None)
     """HIL_STATE_QUATERNION: the true attitude, body rates, virtual position, velocity and
     acceleration (ground truth for the flight stack's log; the acceleration NED in milli-g
     as common.xml gives the unit); ``geo``: :func:`geodetic` of the readout if already
-    computed. Sent at most every step: the frame and unit helpers (``enu_to_ned_xyz``,
-    ``units.deg_e7``, ``mm``, ``cm_s_i16``, ``cm_s_u16``, ``milli_g``) are written out
-    here, the same operations (``units.clamp_int`` does the rounding and saturation)."""
+    computed. Sent at most every step: positional fields, the units from their one place."""
     lat, lon, alt = geo or geodetic(readout, plane)
-    e, n, u = readout.velocity
-    vn, ve, vd = float(n), float(e), -float(u)
-    e, n, u = readout.acceleration
-    an, ae, ad = float(n), float(e), -float(u)
+    vn, ve, vd = enu_to_ned_xyz(*readout.velocity)
+    an, ae, ad = enu_to_ned_xyz(*readout.acceleration)
     w, x, y, z = mavlink_quaternion_from_quat_wb(readout.quaternion)
     p, q, r = readout.body_rates
-    speed = math.sqrt(vn * vn + ve * ve + vd * vd)
-    speed_cm_s = _clamp(speed * 100.0, 0, 65534, _U16_UNKNOWN)
+    speed_cm_s = U.cm_s_u16(math.sqrt(vn * vn + ve * ve + vd * vd))
+    cm_s, milli_g = U.cm_s_i16, U.milli_g
     return mavlink.MAVLink_hil_state_quaternion_message(
-        int(round(readout.time_s * 1e6)), [w, x, y, z],  # time_usec (hil_units.step_usec), attitude_quaternion
+        H.step_usec(readout.time_s), [w, x, y, z],  # time_usec, attitude_quaternion
         float(p), float(q), float(r),  # rollspeed, pitchspeed, yawspeed
-        _clamp(lat * 1e7, _I32_LO, _I32_HI), _clamp(lon * 1e7, _I32_LO, _I32_HI),  # lat, lon (degE7)
-        _clamp(alt * 1000.0, _I32_LO, _I32_HI),  # alt (mm)
-        _clamp(vn * 100.0, _I16_LO, _I16_HI), _clamp(ve * 100.0, _I16_LO, _I16_HI),  # vx, vy (cm/s)
-        _clamp(vd * 100.0, _I16_LO, _I16_HI),  # vz
+        U.deg_e7(lat), U.deg_e7(lon), U.mm(alt),  # lat, lon, alt
+        cm_s(vn), cm_s(ve), cm_s(vd),  # vx, vy, vz
         speed_cm_s, speed_cm_s,  # ind_airspeed, true_airspeed
-        _clamp(an / _G0 * 1000.0, _I16_LO, _I16_HI), _clamp(ae / _G0 * 1000.0, _I16_LO, _I16_HI),  # x/yacc (mG)
-        _clamp(ad / _G0 * 1000.0, _I16_LO, _I16_HI))  # zacc
-
-
-_clamp = U.clamp_int
-(_I32_LO, _I32_HI), (_I16_LO, _I16_HI), _U16_UNKNOWN, _G0 = U.INT32, U.INT16, U.UINT16_UNKNOWN, U.G0
+        milli_g(an), milli_g(ae), milli_g(ad))  # xacc, yacc, zacc

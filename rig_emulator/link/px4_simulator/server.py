@@ -123,10 +123,9 @@ class Px4SimulatorServer:
             if timeout < 0.0:
                 timeout = 0.0
             if s is not None:
-                if not s.lockstep:
-                    free = s.next_free_run_in(now)
-                    if free is not None and free < timeout:
-                        timeout = free
+                free = None if s.lockstep else s.next_free_run_in(now)
+                if free is not None and free < timeout:
+                    timeout = free
             elif not listening:
                 timeout = min(timeout, 0.05)
             readable = select_(fds, [], [], timeout)[0]

@@ -57,12 +57,12 @@ def hilms_imu_module(snap, ctx):
     r = ctx.readings(snap)
     out = []
     t_us = U.time_usec(snap.stamp_us)
-    clamp, (lo, hi) = U.clamp_int, U.INT16  # U.raw_count_i16, 45 times a message set
+    count = U.raw_count_i16
     for i, raw in enumerate(r.imu_raw_counts.tolist()):
         out.append(mavlink.MAVLink_hilms_imu_module_message(
             time_usec=t_us, module_index=i,
-            gyro_raw=[clamp(c, lo, hi) for c in raw[0:3]], accel_raw=[clamp(c, lo, hi) for c in raw[3:6]],
-            mag_raw=[clamp(c, lo, hi) for c in raw[6:9]],
+            gyro_raw=[count(c) for c in raw[0:3]], accel_raw=[count(c) for c in raw[3:6]],
+            mag_raw=[count(c) for c in raw[6:9]],
             fault=int(r.imu_faults[i])))
     return out
 
