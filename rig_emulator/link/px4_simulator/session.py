@@ -84,7 +84,7 @@ class SimulatorSession:
             self._wall0 = min(self._wall0, time.monotonic())
         self.counters.rx_bytes += len(data)
         try:
-            msgs = self.mav.parse_buffer(data) or []
+            msgs = self._parse(data)
         except Exception:  # noqa: BLE001 - hostile bytes must never stop the rig
             self.counters.drop("bad_data")
             self.mav = mavlink.MAVLink(None, srcSystem=SYSID, srcComponent=COMPID)
@@ -92,21 +92,38 @@ class SimulatorSession:
             return True
         for msg in msgs:
             kind = msg.get_type()
-            if kind == "BAD_DATA" or kind.startswith("UNKNOWN"):
+            if kind == "HIL_ACTUATOR_CONTROLS":
+                self.counters.received += 1
+                self._actuators(msg)
+            elif kind == "BAD_DATA" or kind.startswith("UNKNOWN"):
                 self.counters.drop("bad_data")
                 continue
-            self.counters.received += 1
-            if kind == "HIL_ACTUATOR_CONTROLS":
-                self._actuators(msg)
             elif kind == "COMMAND_LONG":
+                self.counters.received += 1
                 self._command(msg)
             elif kind == "HEARTBEAT":
+                self.counters.received += 1
                 self.peer_heartbeat = (msg.get_srcSystem(), msg.get_srcComponent(), msg.autopilot)
             else:
+                self.counters.received += 1
                 self.counters.drop("unhandled")
             if not self.conn.open:
                 return False
         return self.conn.open
+
+    def _parse(self, data: bytes) -> list:
+        """The messages in ``data`` (and in what earlier reads left unfinished): pymavlink's
+        ``parse_buffer`` without its last call, which only finds the buffer empty (one call
+        to pymavlink's ``parse_char`` per message; in lockstep a read holds one message)."""
+        mav = self.mav
+        msg = mav.parse_char(data)
+        msgs = []
+        while msg is not None:
+            msgs.append(msg)
+            if not mav.buf_len():
+                break
+            msg = mav.parse_char(b"")
+        return msgs
 
     def _actuators(self, msg) -> None:
         vmax = self.plant.voltage_max_v
