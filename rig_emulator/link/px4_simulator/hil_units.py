@@ -61,6 +61,15 @@ def motor_voltage(control: float, voltage_max_v: float) -> float:
     """One HIL_ACTUATOR_CONTROLS.controls entry (a motor output, 0 = stopped, 1 = full) ->
     the motor driver's voltage command: ``control * voltage_max`` clipped to 0..voltage_max
     (Eq. 40 makes thrust linear in it: PX4's THR_MDL_FAC = 0). NaN stops the motor."""
-    if not math.isfinite(control):
-        return 0.0
-    return min(max(control, 0.0), 1.0) * voltage_max_v
+    return motor_voltages((control,), voltage_max_v)[0]
+
+
+def motor_voltages(controls, voltage_max_v: float) -> list:
+    """:func:`motor_voltage` of ``controls[0..3]`` (HIL_ACTUATOR_CONTROLS.controls, motors 1-4),
+    in one call: it runs at every flight-stack step."""
+    isfinite = math.isfinite
+    out = []
+    for control in controls[0:4]:
+        control = float(control)
+        out.append(min(max(control, 0.0), 1.0) * voltage_max_v if isfinite(control) else 0.0)
+    return out

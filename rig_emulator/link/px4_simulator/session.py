@@ -126,9 +126,8 @@ class SimulatorSession:
         return msgs
 
     def _actuators(self, msg) -> None:
-        vmax = self.plant.voltage_max_v
-        voltages = [hil_units.motor_voltage(float(u), vmax) for u in msg.controls[0:4]]
-        armed = bool(msg.mode & hil_units.MODE_FLAG_SAFETY_ARMED) or any(v > 0.0 for v in voltages)
+        voltages = hil_units.motor_voltages(msg.controls, self.plant.voltage_max_v)
+        armed = bool(msg.mode & hil_units.MODE_FLAG_SAFETY_ARMED) or max(voltages) > 0.0  # never NaN
         self.actuator_messages += 1
         self.plant.command(voltages, armed)
         if msg.flags & hil_units.FLAG_LOCKSTEP:
@@ -178,18 +177,19 @@ class SimulatorSession:
 
     def step(self) -> None:
         """Advance the plant one step and send that step's messages (in one write)."""
-        readout = self.plant.advance()
-        self.steps += 1
-        self.counters.steps += self.plant.steps_per_update
-        dither = hil_messages.BARO_DITHER_PA if self.steps % 2 else -hil_messages.BARO_DITHER_PA
-        out = [self._pack(hil_messages.hil_sensor(readout, all_fields=self.all_fields, pressure_dither_pa=dither))]
-        gps = self.steps % self.gps_div == 0
+        plant, pack = self.plant, self._pack
+        readout = plant.advance()
+        self.steps = steps = self.steps + 1
+        self.counters.steps += plant.steps_per_update
+        dither = hil_messages.BARO_DITHER_PA if steps % 2 else -hil_messages.BARO_DITHER_PA
+        out = [pack(hil_messages.hil_sensor(readout, 0, self.all_fields, dither))]
+        gps = steps % self.gps_div == 0
         state = self._state_due(hil_units.step_usec(readout.time_s))
         geo = hil_messages.geodetic(readout, self.plane) if gps and state else None  # once for both
         if gps:
-            out.append(self._pack(hil_messages.hil_gps(readout, self.plane, geo)))
+            out.append(pack(hil_messages.hil_gps(readout, self.plane, geo)))
         if state:
-            out.append(self._pack(hil_messages.hil_state_quaternion(readout, self.plane, geo)))
+            out.append(pack(hil_messages.hil_state_quaternion(readout, self.plane, geo)))
         self._write(out)
 
     def _state_due(self, t_us: int) -> bool:

@@ -84,6 +84,12 @@ def test_motor_voltage_mapping():
     assert hil_units.motor_voltage(0.5, 15.0) == 7.5
     assert hil_units.motor_voltage(1.5, 15.0) == 15.0 and hil_units.motor_voltage(-1.0, 15.0) == 0.0
     assert hil_units.motor_voltage(math.nan, 15.0) == 0.0
+    assert hil_units.motor_voltage(math.inf, 15.0) == 0.0 and hil_units.motor_voltage(-math.inf, 15.0) == 0.0
+    # the four motors of one message: only controls[0..3], each mapped as above
+    controls = [0.25, 1.5, math.nan, -0.5, 0.9, 0.9] + [0.0] * 10
+    assert hil_units.motor_voltages(controls, 12.0) == [3.0, 12.0, 0.0, 0.0]
+    assert hil_units.motor_voltages(np.float32([0.1, 0.7, 1.0, 0.0]), 15.0) == [
+        float(np.float32(0.1)) * 15.0, float(np.float32(0.7)) * 15.0, 15.0, 0.0]
 
 
 def test_sampled_between():
