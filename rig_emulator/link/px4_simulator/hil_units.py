@@ -46,8 +46,11 @@ def hpa(pressure_pa: float) -> float:
 
 
 def saturate(value: float, limit: float) -> float:
-    """``value`` clipped to +-``limit``, as a sensor at full scale reads (NaN stays NaN)."""
-    return min(max(value, -limit), limit)
+    """``value`` clipped to +-``limit``, as a sensor at full scale reads (NaN stays NaN).
+    ``min(max(value, -limit), limit)`` written as the comparisons those builtins make (the same
+    float, NaN and -0.0 included, without two calls: six a flight-stack step)."""
+    v = -limit if -limit > value else value  # max(value, -limit)
+    return limit if limit < v else v  # min(v, limit)
 
 
 def cm_u16(length_m: float) -> int:
@@ -71,5 +74,9 @@ def motor_voltages(controls, voltage_max_v: float) -> list:
     out = []
     for control in controls[0:4]:
         control = float(control)
-        out.append(min(max(control, 0.0), 1.0) * voltage_max_v if isfinite(control) else 0.0)
+        if isfinite(control):
+            control = 0.0 if 0.0 > control else control  # min(max(control, 0.0), 1.0): the builtins' comparisons
+            out.append((1.0 if 1.0 < control else control) * voltage_max_v)
+        else:
+            out.append(0.0)
     return out

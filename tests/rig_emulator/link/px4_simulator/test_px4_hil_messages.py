@@ -159,3 +159,20 @@ def test_hil_sensor_keeps_nan_and_in_range_values():
     r = _readout(accel=np.array([np.nan, 156.0, -156.0]))
     m = hil_messages.hil_sensor(r)
     assert math.isnan(m.xacc) and m.yacc == 156.0 and m.zacc == -156.0
+
+
+def test_saturate_and_motor_voltages_are_the_min_max_expressions():
+    # written as comparisons for speed: the same floats as min/max, NaN, +-inf and -0.0 included
+    rng = np.random.default_rng(5)
+    specials = [math.nan, math.inf, -math.inf, 0.0, -0.0, 1.0, -1.0, 2.0, -2.0, 0.5]
+    values = specials + rng.normal(0.0, 2.0, 2000).tolist()
+    for v in values:
+        for limit in (1.0, 2.0, hil_units.ACCEL_LIMIT_M_S2):
+            want = min(max(v, -limit), limit)
+            got = hil_units.saturate(v, limit)
+            assert (math.isnan(want) and math.isnan(got)) or (got == want and math.copysign(1, got) == math.copysign(1, want))
+    for i in range(0, len(values) - 3, 4):
+        controls = values[i:i + 4]
+        want = [min(max(c, 0.0), 1.0) * 15.0 if math.isfinite(c) else 0.0 for c in controls]
+        got = hil_units.motor_voltages(controls, 15.0)
+        assert [(g, math.copysign(1, g)) for g in got] == [(w, math.copysign(1, w)) for w in want]
