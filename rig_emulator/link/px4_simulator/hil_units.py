@@ -53,6 +53,16 @@ def saturate(value: float, limit: float) -> float:
     return limit if limit < v else v  # min(v, limit)
 
 
+def saturate_xyz(vector, limit: float) -> tuple:
+    """:func:`saturate` of the three components of ``vector`` (as floats), in one call."""
+    x, y, z = map(float, vector)
+    lo = -limit
+    x = lo if lo > x else x
+    y = lo if lo > y else y
+    z = lo if lo > z else z
+    return (limit if limit < x else x), (limit if limit < y else y), (limit if limit < z else z)
+
+
 def cm_u16(length_m: float) -> int:
     """Metres -> centimetres in a uint16 (HIL_GPS.eph/epv; 65535 = unknown)."""
     if not math.isfinite(length_m):

@@ -171,6 +171,12 @@ def test_saturate_and_motor_voltages_are_the_min_max_expressions():
             want = min(max(v, -limit), limit)
             got = hil_units.saturate(v, limit)
             assert (math.isnan(want) and math.isnan(got)) or (got == want and math.copysign(1, got) == math.copysign(1, want))
+    for i in range(0, len(values) - 2, 3):
+        got = hil_units.saturate_xyz(np.array(values[i:i + 3]), 2.0)
+        want = [hil_units.saturate(v, 2.0) for v in values[i:i + 3]]
+        assert [(g, math.copysign(1, g)) for g in got if not math.isnan(g)] == \
+            [(w, math.copysign(1, w)) for w in want if not math.isnan(w)]
+        assert [math.isnan(g) for g in got] == [math.isnan(w) for w in want]
     for i in range(0, len(values) - 3, 4):
         controls = values[i:i + 4]
         want = [min(max(c, 0.0), 1.0) * 15.0 if math.isfinite(c) else 0.0 for c in controls]
