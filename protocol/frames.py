@@ -222,7 +222,7 @@ def mavlink_quaternion_from_quat_wb(q_wb) -> tuple[float, float, float, float]:
     the rig's quaternion of R_WB (scalar first): the same as :func:`mavlink_quaternion_from_rwb`
     as a quaternion product, without building matrices (for per-step messages)."""
     aw, ax, ay, az = _Q_NED_ENU
-    bw, bx, by, bz = (float(v) for v in q_wb)
+    bw, bx, by, bz = map(float, q_wb)
     w = aw * bw - ax * bx - ay * by - az * bz
     x = aw * bx + ax * bw + ay * bz - az * by
     y = aw * by - ax * bz + ay * bw + az * bx

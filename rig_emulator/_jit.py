@@ -25,10 +25,11 @@ function they are inlined into). Such a function must not allocate (numba refuse
 compile ``np.empty`` or a whole-slice copy without NRT, as the no-allocation-per-step rule
 wants) and must not be called from Python with a ``numpy.random.Generator`` (unboxing one
 takes a reference that only NRT releases: a leak per call); the loop's entry point
-therefore takes the generator's bit generator instead (``rig_emulator/simulation/rng_bits.py``;
-an NRT wrapper around the loop compiled the whole loop twice). The flag is always set
-explicitly, so a function never inherits it from whichever caller happened to compile it
-first (numba would otherwise, and its cache does not tell the two apart).
+therefore takes the pointers of the generator's bit generator instead
+(``rig_emulator/simulation/rng_bits.py``; an NRT wrapper around the loop compiled the whole
+loop twice). The flag is always set explicitly, so a function never inherits it from
+whichever caller happened to compile it first (numba would otherwise, and its cache does not
+tell the two apart).
 
 An ``nrt=False`` function is also compiled without numba's CPython wrapper (it is called
 from compiled code; a call from Python runs a twin compiled with one), and no function gets

@@ -89,7 +89,8 @@ def run_steps(
     starts afresh on arming.
 
     Compiled without reference counting (no allocation here), so the sensors' generator
-    comes as its bit generator ``rng_bits`` (``rng.bit_generator``), not as the Generator.
+    comes as its bit generator's pointers ``rng_bits`` (``rng_bits.pointers(rng.bit_generator)``),
+    not as the Generator.
     """
     rng = generator(rng_bits)
     ctrl_dt = dt * ctrl_div

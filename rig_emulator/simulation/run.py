@@ -18,6 +18,7 @@ from rig_emulator.physics.rotation import quat_from_euler
 from rig_emulator.simulation import log_layout as L
 from rig_emulator.control.supervisor import F_FAILSAFE, reset_failsafe, supervisor_params, supervisor_state
 from rig_emulator.simulation.faults import FaultEvent, FaultInjector, FaultStatus, fault_status
+from rig_emulator.simulation import rng_bits
 from rig_emulator.simulation.entry_points import BoundEntry
 from rig_emulator.simulation.loop import run_steps
 from rig_emulator.control.plugin_layout import P_EXTERNAL
@@ -117,6 +118,7 @@ class Simulation:
         self.k = 0
         self._armed = True
         self._loop = BoundEntry(run_steps)  # the step loop's entry point for this rig's objects
+        self._rng_held = None  # (bit generator, its pointers): _rng_pointers
 
     @property
     def time(self) -> float:
@@ -176,7 +178,7 @@ class Simulation:
             self.x, self.v_cmd, self.pp, self.cp, self.gp, d.wind, d.gusts, d.shocks, d.extra,
             self.cstate, self.gstate, self.reached_t, self.ref, self.cout, self.scratch, self.work, self.R,
             self.log, self.log_row, bool(self._armed),
-            self.sensing.params, self.sensing.state, self.sensing.run_rng.bit_generator, self.up, self.us,
+            self.sensing.params, self.sensing.state, self._rng_pointers(), self.up, self.us,
             self.plugin.params, self.plugin.fn,
         )
         # the scalars between the objects (log_row, armed) are left out of the lookup's key
@@ -186,6 +188,20 @@ class Simulation:
             self._plugin_failed()
         if self._armed and self.up.fs_disarm and self.us.flags[F_FAILSAFE] != 0:
             self._armed = False  # the failsafe cut the motors inside the loop; the rig stays disarmed
+
+    def _rng_pointers(self) -> tuple:
+        """The sensors' bit generator as the loop takes it (:func:`rng_bits.pointers`), read once
+        per bit generator (the sensing may be replaced); the bit generator is held with them."""
+        bits = self.sensing.run_rng.bit_generator
+        held = self._rng_held
+        if held is None or held[0] is not bits:
+            held = self._rng_held = (bits, rng_bits.pointers(bits))
+        return held[1]
+
+    def __getstate__(self) -> dict:
+        """A copy (``copy.deepcopy``, pickle) reads its own bit generator's pointers again: the
+        copied ones would point into the original's memory."""
+        return {**self.__dict__, "_rng_held": None}
 
     def _plugin_failed(self) -> None:
         """The plug-in failed inside the loop, which disarmed: keep the rig disarmed and the reason."""

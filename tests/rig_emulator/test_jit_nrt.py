@@ -16,7 +16,7 @@ from rig_emulator.estimation import (attitude_pipeline, complementary, ensemble,
 from rig_emulator.guidance import runner, trajectories
 from rig_emulator.physics import disturbances, integrator, rigid_body, rotation
 from rig_emulator.sensors import imu_module, sensor_step
-from rig_emulator.simulation import loop
+from rig_emulator.simulation import loop, rng_bits
 from rig_emulator.simulation.run import Simulation
 
 Pair = namedtuple("Pair", "a b")
@@ -105,9 +105,32 @@ def test_the_inlined_step_loop_functions_are_inlined(dispatcher):
     assert dispatcher.targetoptions["inline"] == "always"
 
 
+@jit(cache=False, nrt=False)
+def _draws(bits, out):
+    rng = rng_bits.generator(bits)
+    for i in range(out.shape[0]):
+        out[i] = rng.standard_normal()
+
+
+@pytest.mark.parametrize("seed", [0, 7])
+def test_the_loop_draws_the_generator_numbers_from_its_pointers_or_its_bit_generator(seed):
+    # rng_bits.pointers: the bit generator as five integers, read once; numba's Generator rebuilt
+    # over them draws the numbers of the Python generator and advances its state in place
+    ref = np.random.default_rng(seed)
+    expected = ref.standard_normal(64)
+    for arg in (rng_bits.pointers, lambda b: b):
+        rng = np.random.default_rng(seed)
+        out = np.zeros(32)
+        _draws(arg(rng.bit_generator), out)
+        assert np.array_equal(out, expected[:32])
+        assert np.array_equal(rng.standard_normal(32), expected[32:])  # the state moved in place
+    bits = np.random.default_rng(seed).bit_generator
+    assert rng_bits.pointers(bits) == rng_bits.pointers(bits)  # fixed for the bit generator's life
+
+
 def test_entry_point_takes_the_bit_generator_and_keeps_no_reference():
     # an nrt=False function called from Python with a Generator would keep one reference to
-    # it per call: the step loop takes its bit generator (rig_emulator/simulation/rng_bits.py);
+    # it per call: the step loop takes its bit generator's pointers (rig_emulator/simulation/rng_bits.py);
     # sample_imu_modules, called from Python with a Generator, keeps NRT for that reason
     assert imu_module.sample_imu_modules.targetoptions["_nrt"] is True
     sim = Simulation(load_config(scenario="hover", overrides={"sim.duration": 1.0}))

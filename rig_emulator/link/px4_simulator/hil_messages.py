@@ -67,11 +67,11 @@ def hil_sensor(readout, sensor_id: int = 0, all_fields: bool = False, pressure_d
     constructor a dictionary per message), the units from their one place (``hil_units``,
     ``units``)."""
     a, g, m = readout.accel, readout.gyro, readout.mag
-    al, gl, sat, gauss = H.ACCEL_LIMIT_M_S2, H.GYRO_LIMIT_RAD_S, H.saturate, U.gauss
+    gauss = U.gauss
     return mavlink.MAVLink_hil_sensor_message(
         H.step_usec(readout.time_s),  # time_usec
-        sat(float(a[0]), al), sat(float(a[1]), al), sat(float(a[2]), al),  # xacc..zacc
-        sat(float(g[0]), gl), sat(float(g[1]), gl), sat(float(g[2]), gl),  # xgyro..zgyro
+        *H.saturate_xyz(a, H.ACCEL_LIMIT_M_S2),  # xacc, yacc, zacc
+        *H.saturate_xyz(g, H.GYRO_LIMIT_RAD_S),  # xgyro, ygyro, zgyro
         gauss(float(m[0])), gauss(float(m[1])), gauss(float(m[2])),  # xmag..zmag
         H.hpa(readout.pressure_pa + pressure_dither_pa),  # abs_pressure
         0.0,  # diff_pressure

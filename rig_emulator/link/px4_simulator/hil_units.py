@@ -46,8 +46,21 @@ def hpa(pressure_pa: float) -> float:
 
 
 def saturate(value: float, limit: float) -> float:
-    """``value`` clipped to +-``limit``, as a sensor at full scale reads (NaN stays NaN)."""
-    return min(max(value, -limit), limit)
+    """``value`` clipped to +-``limit``, as a sensor at full scale reads (NaN stays NaN).
+    ``min(max(value, -limit), limit)`` written as the comparisons those builtins make (the same
+    float, NaN and -0.0 included, without two calls: six a flight-stack step)."""
+    v = -limit if -limit > value else value  # max(value, -limit)
+    return limit if limit < v else v  # min(v, limit)
+
+
+def saturate_xyz(vector, limit: float) -> tuple:
+    """:func:`saturate` of the three components of ``vector`` (as floats), in one call."""
+    x, y, z = map(float, vector)
+    lo = -limit
+    x = lo if lo > x else x
+    y = lo if lo > y else y
+    z = lo if lo > z else z
+    return (limit if limit < x else x), (limit if limit < y else y), (limit if limit < z else z)
 
 
 def cm_u16(length_m: float) -> int:
@@ -61,6 +74,19 @@ def motor_voltage(control: float, voltage_max_v: float) -> float:
     """One HIL_ACTUATOR_CONTROLS.controls entry (a motor output, 0 = stopped, 1 = full) ->
     the motor driver's voltage command: ``control * voltage_max`` clipped to 0..voltage_max
     (Eq. 40 makes thrust linear in it: PX4's THR_MDL_FAC = 0). NaN stops the motor."""
-    if not math.isfinite(control):
-        return 0.0
-    return min(max(control, 0.0), 1.0) * voltage_max_v
+    return motor_voltages((control,), voltage_max_v)[0]
+
+
+def motor_voltages(controls, voltage_max_v: float) -> list:
+    """:func:`motor_voltage` of ``controls[0..3]`` (HIL_ACTUATOR_CONTROLS.controls, motors 1-4),
+    in one call: it runs at every flight-stack step."""
+    isfinite = math.isfinite
+    out = []
+    for control in controls[0:4]:
+        control = float(control)
+        if isfinite(control):
+            control = 0.0 if 0.0 > control else control  # min(max(control, 0.0), 1.0): the builtins' comparisons
+            out.append((1.0 if 1.0 < control else control) * voltage_max_v)
+        else:
+            out.append(0.0)
+    return out

@@ -84,7 +84,7 @@ class SimulatorSession:
             self._wall0 = min(self._wall0, time.monotonic())
         self.counters.rx_bytes += len(data)
         try:
-            msgs = self.mav.parse_buffer(data) or []
+            msgs = self._parse(data)
         except Exception:  # noqa: BLE001 - hostile bytes must never stop the rig
             self.counters.drop("bad_data")
             self.mav = mavlink.MAVLink(None, srcSystem=SYSID, srcComponent=COMPID)
@@ -92,26 +92,42 @@ class SimulatorSession:
             return True
         for msg in msgs:
             kind = msg.get_type()
-            if kind == "BAD_DATA" or kind.startswith("UNKNOWN"):
+            if kind == "HIL_ACTUATOR_CONTROLS":
+                self.counters.received += 1
+                self._actuators(msg)
+            elif kind == "BAD_DATA" or kind.startswith("UNKNOWN"):
                 self.counters.drop("bad_data")
                 continue
-            self.counters.received += 1
-            if kind == "HIL_ACTUATOR_CONTROLS":
-                self._actuators(msg)
             elif kind == "COMMAND_LONG":
+                self.counters.received += 1
                 self._command(msg)
             elif kind == "HEARTBEAT":
+                self.counters.received += 1
                 self.peer_heartbeat = (msg.get_srcSystem(), msg.get_srcComponent(), msg.autopilot)
             else:
+                self.counters.received += 1
                 self.counters.drop("unhandled")
             if not self.conn.open:
                 return False
         return self.conn.open
 
+    def _parse(self, data: bytes) -> list:
+        """The messages in ``data`` (and in what earlier reads left unfinished): pymavlink's
+        ``parse_buffer`` without its last call, which only finds the buffer empty (one call
+        to pymavlink's ``parse_char`` per message; in lockstep a read holds one message)."""
+        mav = self.mav
+        msg = mav.parse_char(data)
+        msgs = []
+        while msg is not None:
+            msgs.append(msg)
+            if not mav.buf_len():
+                break
+            msg = mav.parse_char(b"")
+        return msgs
+
     def _actuators(self, msg) -> None:
-        vmax = self.plant.voltage_max_v
-        voltages = [hil_units.motor_voltage(float(u), vmax) for u in msg.controls[0:4]]
-        armed = bool(msg.mode & hil_units.MODE_FLAG_SAFETY_ARMED) or any(v > 0.0 for v in voltages)
+        voltages = hil_units.motor_voltages(msg.controls, self.plant.voltage_max_v)
+        armed = bool(msg.mode & hil_units.MODE_FLAG_SAFETY_ARMED) or max(voltages) > 0.0  # never NaN
         self.actuator_messages += 1
         self.plant.command(voltages, armed)
         if msg.flags & hil_units.FLAG_LOCKSTEP:
@@ -161,18 +177,19 @@ class SimulatorSession:
 
     def step(self) -> None:
         """Advance the plant one step and send that step's messages (in one write)."""
-        readout = self.plant.advance()
-        self.steps += 1
-        self.counters.steps += self.plant.steps_per_update
-        dither = hil_messages.BARO_DITHER_PA if self.steps % 2 else -hil_messages.BARO_DITHER_PA
-        out = [self._pack(hil_messages.hil_sensor(readout, all_fields=self.all_fields, pressure_dither_pa=dither))]
-        gps = self.steps % self.gps_div == 0
+        plant, pack = self.plant, self._pack
+        readout = plant.advance()
+        self.steps = steps = self.steps + 1
+        self.counters.steps += plant.steps_per_update
+        dither = hil_messages.BARO_DITHER_PA if steps % 2 else -hil_messages.BARO_DITHER_PA
+        out = [pack(hil_messages.hil_sensor(readout, 0, self.all_fields, dither))]
+        gps = steps % self.gps_div == 0
         state = self._state_due(hil_units.step_usec(readout.time_s))
         geo = hil_messages.geodetic(readout, self.plane) if gps and state else None  # once for both
         if gps:
-            out.append(self._pack(hil_messages.hil_gps(readout, self.plane, geo)))
+            out.append(pack(hil_messages.hil_gps(readout, self.plane, geo)))
         if state:
-            out.append(self._pack(hil_messages.hil_state_quaternion(readout, self.plane, geo)))
+            out.append(pack(hil_messages.hil_state_quaternion(readout, self.plane, geo)))
         self._write(out)
 
     def _state_due(self, t_us: int) -> bool:

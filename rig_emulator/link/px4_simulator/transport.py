@@ -16,6 +16,7 @@ flight controller board in HIL). Nothing here parses MAVLink.
 from __future__ import annotations
 
 import errno
+import functools
 import os
 import socket
 import time
@@ -91,7 +92,16 @@ class Connection:
     def write(self, data: bytes) -> bool:
         """Send all of ``data`` (waits while the peer's buffer is full, up to SEND_TIMEOUT_S);
         False when the stream broke."""
-        view = memoryview(data)
+        try:
+            n = self._send(data)
+        except (BlockingIOError, InterruptedError):
+            n = 0
+        except OSError:
+            self.close()
+            return False
+        if n == len(data):  # all of it at once (a step's messages, almost always)
+            return True
+        view = memoryview(data)[n:]
         deadline = None
         while view:
             try:
@@ -153,7 +163,7 @@ class TcpListener:
             return None
         sock.setblocking(False)
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        return Connection(sock.fileno(), lambda s=sock: s.recv(RECV_CHUNK), sock.send, sock.close,
+        return Connection(sock.fileno(), functools.partial(sock.recv, RECV_CHUNK), sock.send, sock.close,
                           f"tcp:{addr[0]}:{addr[1]}")
 
     def close(self) -> None:

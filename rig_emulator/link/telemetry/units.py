@@ -14,6 +14,8 @@ G0 = 9.80665  # standard gravity, the MAVLink "milli-g" unit
 GAUSS_PER_TESLA = 1e4
 INT16 = (-32768, 32767)
 INT32 = (-(2**31), 2**31 - 1)
+INT16_MIN, INT16_MAX = INT16  # the bounds passed one by one: a call with *INT16 unpacks a tuple each time
+INT32_MIN, INT32_MAX = INT32
 UINT16_UNKNOWN = 65535
 
 
@@ -55,15 +57,15 @@ def unix_usec(t_unix_s: float) -> int:
 
 
 def deg_e7(deg: float) -> int:
-    return clamp_int(deg * 1e7, *INT32)
+    return clamp_int(deg * 1e7, INT32_MIN, INT32_MAX)
 
 
 def mm(m: float) -> int:
-    return clamp_int(m * 1000.0, *INT32)
+    return clamp_int(m * 1000.0, INT32_MIN, INT32_MAX)
 
 
 def cm_s_i16(v_m_s: float) -> int:
-    return clamp_int(v_m_s * 100.0, *INT16)
+    return clamp_int(v_m_s * 100.0, INT16_MIN, INT16_MAX)
 
 
 def cm_s_u16(v_m_s: float) -> int:
@@ -85,15 +87,15 @@ def heading_rad_to_deg(yaw_rad: float) -> int:
 
 
 def milli_g(accel_m_s2: float) -> int:
-    return clamp_int(accel_m_s2 / G0 * 1000.0, *INT16)
+    return clamp_int(accel_m_s2 / G0 * 1000.0, INT16_MIN, INT16_MAX)
 
 
 def milli_rad_s(rate_rad_s: float) -> int:
-    return clamp_int(rate_rad_s * 1000.0, *INT16)
+    return clamp_int(rate_rad_s * 1000.0, INT16_MIN, INT16_MAX)
 
 
 def milli_gauss(field_t: float) -> int:
-    return clamp_int(field_t * GAUSS_PER_TESLA * 1000.0, *INT16)
+    return clamp_int(field_t * GAUSS_PER_TESLA * 1000.0, INT16_MIN, INT16_MAX)
 
 
 def gauss(field_t: float) -> float:
@@ -113,7 +115,7 @@ def percent(fraction: float) -> int:
 
 
 def raw_count_i16(counts: float) -> int:
-    return clamp_int(counts, *INT16)
+    return clamp_int(counts, INT16_MIN, INT16_MAX)
 
 
 def raw_count_u16(counts: float) -> int:

@@ -84,6 +84,12 @@ def test_motor_voltage_mapping():
     assert hil_units.motor_voltage(0.5, 15.0) == 7.5
     assert hil_units.motor_voltage(1.5, 15.0) == 15.0 and hil_units.motor_voltage(-1.0, 15.0) == 0.0
     assert hil_units.motor_voltage(math.nan, 15.0) == 0.0
+    assert hil_units.motor_voltage(math.inf, 15.0) == 0.0 and hil_units.motor_voltage(-math.inf, 15.0) == 0.0
+    # the four motors of one message: only controls[0..3], each mapped as above
+    controls = [0.25, 1.5, math.nan, -0.5, 0.9, 0.9] + [0.0] * 10
+    assert hil_units.motor_voltages(controls, 12.0) == [3.0, 12.0, 0.0, 0.0]
+    assert hil_units.motor_voltages(np.float32([0.1, 0.7, 1.0, 0.0]), 15.0) == [
+        float(np.float32(0.1)) * 15.0, float(np.float32(0.7)) * 15.0, 15.0, 0.0]
 
 
 def test_sampled_between():
@@ -153,3 +159,26 @@ def test_hil_sensor_keeps_nan_and_in_range_values():
     r = _readout(accel=np.array([np.nan, 156.0, -156.0]))
     m = hil_messages.hil_sensor(r)
     assert math.isnan(m.xacc) and m.yacc == 156.0 and m.zacc == -156.0
+
+
+def test_saturate_and_motor_voltages_are_the_min_max_expressions():
+    # written as comparisons for speed: the same floats as min/max, NaN, +-inf and -0.0 included
+    rng = np.random.default_rng(5)
+    specials = [math.nan, math.inf, -math.inf, 0.0, -0.0, 1.0, -1.0, 2.0, -2.0, 0.5]
+    values = specials + rng.normal(0.0, 2.0, 2000).tolist()
+    for v in values:
+        for limit in (1.0, 2.0, hil_units.ACCEL_LIMIT_M_S2):
+            want = min(max(v, -limit), limit)
+            got = hil_units.saturate(v, limit)
+            assert (math.isnan(want) and math.isnan(got)) or (got == want and math.copysign(1, got) == math.copysign(1, want))
+    for i in range(0, len(values) - 2, 3):
+        got = hil_units.saturate_xyz(np.array(values[i:i + 3]), 2.0)
+        want = [hil_units.saturate(v, 2.0) for v in values[i:i + 3]]
+        assert [(g, math.copysign(1, g)) for g in got if not math.isnan(g)] == \
+            [(w, math.copysign(1, w)) for w in want if not math.isnan(w)]
+        assert [math.isnan(g) for g in got] == [math.isnan(w) for w in want]
+    for i in range(0, len(values) - 3, 4):
+        controls = values[i:i + 4]
+        want = [min(max(c, 0.0), 1.0) * 15.0 if math.isfinite(c) else 0.0 for c in controls]
+        got = hil_units.motor_voltages(controls, 15.0)
+        assert [(g, math.copysign(1, g)) for g in got] == [(w, math.copysign(1, w)) for w in want]
