@@ -20,13 +20,6 @@ so it stays 0). HEARTBEAT goes out only on the peers' opening
 
 Every frame is written as one line: airframe, chunk index, peer, message name and the frame's
 bytes in hex (pymavlink's encoding: the same bytes a client receives), then a SHA-256 of all.
-
-``--pipelined`` runs the chunks between the script's commands through the loop's own
-``--speedup max`` tick (``RigServer._unpaced_tick``, ticks of at most ``CATCH_UP_CHUNKS``
-chunks, no wall-clock limit): each chunk's telemetry is sent while the next chunk runs on the
-step worker (issue 14). A frame's chunk index is then the chunk whose polls or streams queued
-it (the step counter when it was queued), the commands' replies that of the chunk they precede,
-as without the option: the two recordings compare line for line.
 """
 
 from __future__ import annotations
@@ -60,14 +53,13 @@ class RecordingEndpoint(Endpoint):
 
     def __init__(self):
         super().__init__("record:")
-        self.frames: list[tuple] = []  # (key, bytes, chunk index)
-        self.chunk_of = lambda: -1
+        self.frames: list[tuple] = []  # (key, bytes)
 
     def poll(self) -> list[tuple]:
         return []
 
     def send(self, key, data: bytes) -> bool:
-        self.frames.append((key, bytes(data), self.chunk_of()))
+        self.frames.append((key, bytes(data)))
         return True
 
     def filenos(self) -> list:
@@ -104,15 +96,12 @@ def _config(spec: str):
     return load_config(airframe=airframe, overrides=overrides or None)
 
 
-def record(airframe: str, sim_s: float, out: list, pipelined: bool = False) -> None:
+def record(airframe: str, sim_s: float, out: list) -> None:
     status_mod.time = types.SimpleNamespace(time=lambda: BOOT_UNIX_S)  # SYSTEM_TIME's wall clock, fixed
     rig = prepare_rig(_config(airframe))
     server = srv.RigServer(rig, [], speedup=0.0, chunk_s=chunk_seconds(5.0, 0.0))
     ep = RecordingEndpoint()
     server.endpoints.append(ep)
-    command_chunk = 0  # the chunk the set-up's and a script command's frames belong to (the one they precede);
-    # otherwise a frame belongs to the chunk whose polls or streams queued it: counters.steps counts it then
-    ep.chunk_of = lambda: command_chunk if command_chunk is not None else server.counters.steps // server.chunk_steps - 1
     server._open_channel(ep, ("default", 1))
     server._open_channel(ep, ("all", 2))
     ch_default, ch_all = server.channels[(id(ep), ("default", 1))], server.channels[(id(ep), ("all", 2))]
@@ -134,30 +123,16 @@ def record(airframe: str, sim_s: float, out: list, pipelined: bool = False) -> N
         440: lambda: _command(server, ch_default, gcs, M.MAV_CMD_NAV_RETURN_TO_LAUNCH),
         520: lambda: _command(server, ch_default, gcs, M.MAV_CMD_NAV_LAND),
     }
-    command_chunk = None
-
-    def write_frames():
-        for key, data, k in ep.frames:
+    for k in range(n_chunks):
+        if k in script:
+            script[k]()
+        server.step_chunk()
+        server.emit_streams()
+        server.flush()
+        for key, data in ep.frames:
             msg = gcs.decode(bytearray(data))
             out.append(f"{airframe.replace(' ', '')} {k} {key[0]} {msg.get_type()} {data.hex()}")
         ep.frames.clear()
-
-    k = 0
-    while k < n_chunks:
-        if k in script:
-            command_chunk = k
-            script[k]()
-            command_chunk = None
-        if pipelined:  # the --speedup max tick, up to the next command, in ticks of CATCH_UP_CHUNKS chunks
-            n = min(srv.CATCH_UP_CHUNKS, n_chunks - k, min([c for c in script if c > k], default=n_chunks) - k)
-            server._unpaced_tick(n, math.inf, math.inf, 0.0, 0.0)
-        else:
-            n = 1
-            server.step_chunk()
-            server.emit_streams()
-        server.flush()
-        write_frames()
-        k += n
     server.close()
 
 
@@ -167,8 +142,6 @@ def main() -> int:
     ap.add_argument("--sim-s", type=float, default=12.0, help="simulated seconds per airframe (default 12)")
     ap.add_argument("--airframes", default="hilms-ideal,hilms,hilms-ideal:sensors.simulate=false",
                     help="comma-separated: airframe or airframe:key=value (default: %(default)s)")
-    ap.add_argument("--pipelined", action="store_true",
-                    help="run the chunks through the --speedup max tick (the step worker), see above")
     ap.add_argument("--compare", nargs=2, metavar=("A", "B"), help="compare two recordings instead")
     args = ap.parse_args()
     if args.compare:
@@ -184,7 +157,7 @@ def main() -> int:
         return 0
     out: list[str] = []
     for airframe in args.airframes.split(","):
-        record(airframe, args.sim_s, out, pipelined=args.pipelined)
+        record(airframe, args.sim_s, out)
     digest = hashlib.sha256("\n".join(out).encode()).hexdigest()
     counts: dict = {}
     for line in out:

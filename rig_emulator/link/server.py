@@ -114,7 +114,6 @@ class RigServer:
         #: AUTO.MISSION), so a scripted flight does not depend on when its set-up commands arrived
         self.hold_clock = False
         self.timing = None  # a rig_emulator.link.loop_timing.LoopTiming records every chunk's wall times
-        self.worker = None  # a StepWorker (rig_emulator.link.step_worker) once the loop ran unpaced
         self.command_dedup = CommandDedup()
         self.last_calibration = -math.inf  # wall-clock time of the last PREFLIGHT_CALIBRATION run
         self.heartbeat_pending = False
@@ -320,18 +319,7 @@ class RigServer:
 
     # --- the loop ------------------------------------------------------------------------------------
     def step_chunk(self) -> None:
-        """Advance one chunk and run the per-chunk polls (mission, monitors, flight tasks, faults, console)."""
-        self.begin_chunk()
-        self.end_chunk()
-
-    def begin_chunk(self, submit=None) -> None:
-        """Start the next chunk; with ``submit`` (a :class:`~rig_emulator.link.step_worker.StepWorker`'s)
-        on the worker thread, and then nothing may read or command the rig until :meth:`end_chunk`."""
-        self.rig.step_start(self.chunk_steps, submit)
-
-    def end_chunk(self) -> None:
-        """Finish the chunk :meth:`begin_chunk` started (waiting for the worker) and run the polls."""
-        self.rig.step_finish()
+        self.rig.step(self.chunk_steps)
         self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
@@ -354,29 +342,20 @@ class RigServer:
         """Build the streams due now (each once, whichever peers it is due for) and queue them to their
         peers, in the peers' order and each peer's schedule order. Runs after every chunk (50 times a
         simulated second at ``--speedup max``), so its lookups are hoisted out of the loops."""
-        self.send_streams(self.plan_streams())
-
-    def plan_streams(self) -> tuple:
-        """What :meth:`send_streams` sends for the present chunk: each peer's streams due now and the
-        snapshot they are built from (taken here, when any is due). Everything the builders read of
-        the rig is in the snapshot or in the link's own state, so the next chunk may run meanwhile."""
         now = self.rig.time_s
-        plan = []
+        built: dict[int, list] = {}
+        snap = None
+        ctx = self.ctx
         for ch in list(self.channels.values()):
             due = ch.schedule.due(now)
-            if due:
-                plan.append((ch.send, due))
-        return plan, (self.snapshot() if plan else None)
-
-    def send_streams(self, planned: tuple) -> None:
-        """Build the streams :meth:`plan_streams` found due (each once) and queue them to their peers."""
-        plan, snap = planned
-        built: dict[int, list] = {}
-        ctx = self.ctx
-        for send, due in plan:
+            if not due:
+                continue
+            send = ch.send
             for msg_id in due:
                 msgs = built.get(msg_id)
                 if msgs is None:
+                    if snap is None:
+                        snap = self.snapshot()
                     out = STREAMS[msg_id].build(snap, ctx)
                     msgs = built[msg_id] = out if isinstance(out, list) else (out,)
                 for msg in msgs:
@@ -400,15 +379,6 @@ class RigServer:
 
     def run(self, duration: float | None = None) -> None:
         """Serve until :meth:`stop` or until ``duration`` more simulated seconds have passed."""
-        if self.speedup > 0.0:
-            self._run(duration)
-            return
-        from rig_emulator.link.step_worker import short_switch_interval
-
-        with short_switch_interval():  # the step worker's GIL hand-offs (step_worker.py)
-            self._run(duration)
-
-    def _run(self, duration: float | None) -> None:
         t_end = math.inf if duration is None else self.rig.time_s + duration - 0.5 * self.rig.dt
         wall0 = time.monotonic()
         sim0 = self.rig.time_s
@@ -453,15 +423,15 @@ class RigServer:
             else:
                 n_chunks = CATCH_UP_CHUNKS
             tick_end = t0 + TICK_WALL_S
-            if self.speedup <= 0.0 and self.rig.time_s < t_end:
-                self._unpaced_tick(n_chunks, t_end, tick_end, wall0, sim0)
-            for _ in range(n_chunks if self.speedup > 0.0 else 0):
+            for _ in range(n_chunks):
                 if self.rig.time_s >= t_end:
                     break
                 if self.timing is not None:
                     self.timing.begin(wall0, sim0, self.rig.time_s)
                 self.step_chunk()
                 self.emit_streams()
+                if self.speedup <= 0.0 and time.monotonic() >= tick_end:
+                    break
             self.flush()
             t1 = time.monotonic()
             busy += t1 - t0
@@ -471,42 +441,6 @@ class RigServer:
                 self.ctx.load_fraction = min(busy / (t1 - window_start), 1.0)
                 busy, window_start = 0.0, t1
         self._drain()
-
-    def _unpaced_tick(self, n_chunks: int, t_end: float, tick_end: float, wall0: float, sim0: float) -> None:
-        """Up to ``n_chunks`` chunks (while ``tick_end`` has not passed), each chunk's telemetry sent
-        while the next chunk's compiled loop runs on :attr:`worker` (``--speedup max``, issue 14).
-
-        The order of everything that reads or commands the rig is the serial loop's: chunk k's
-        polls, then its snapshot and its due streams (:meth:`plan_streams`), then chunk k + 1 starts;
-        chunk k's messages are built from that snapshot and the link's own state while it runs, and
-        queued in the order the serial loop queues them (chunk k's streams before chunk k + 1's
-        polls' messages). The link is serviced between ticks, when no chunk runs, so a command takes
-        effect at the same chunk boundary as in the serial loop."""
-        timing = self.timing
-        if self.worker is None:
-            from rig_emulator.link.step_worker import StepWorker
-
-            self.worker = StepWorker()
-        submit = self.worker.submit
-        if timing is not None:
-            timing.begin(wall0, sim0, self.rig.time_s)
-        self.step_chunk()
-        for i in range(1, n_chunks + 1):
-            planned = self.plan_streams()
-            more = i < n_chunks and self.rig.time_s < t_end and time.monotonic() < tick_end
-            if more:
-                if timing is not None:
-                    timing.begin(wall0, sim0, self.rig.time_s)
-                self.begin_chunk(submit)
-            try:
-                self.send_streams(planned)
-            except BaseException:
-                if more:
-                    self.rig.step_finish()  # the worker's chunk ends before the error leaves the loop
-                raise
-            if not more:
-                return
-            self.end_chunk()
 
     def _drain(self, timeout_s: float = 0.5) -> None:
         """Give queued TCP bytes (e.g. the last ACKs) a moment to leave before closing."""
@@ -519,9 +453,6 @@ class RigServer:
             time.sleep(0.005)
 
     def close(self) -> None:
-        if self.worker is not None:
-            self.worker.close()
-            self.worker = None
         for ep in self.endpoints:
             ep.close()
         self.endpoints = []

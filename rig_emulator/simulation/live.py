@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba.core.types.function_type import WrapperAddressProtocol
 
 from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.control.controller import (CS_TEST_UNTIL, CS_TEST_V, OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S,
@@ -253,7 +252,6 @@ class LiveRig:
         self._flying = None  # the same for the mission (or task path) the guidance was last started on
         self._path_kind = None  # what the waypoint guidance flies: "mission", "task" (fly_path) or None
         self._speed_override = None  # m/s set by change_speed (DO_CHANGE_SPEED) until a reboot
-        self._stepping = None  # (n_steps, the handed-off call's result getter or None) between step_start/_finish
 
     # --- stepping ----------------------------------------------------------------------
     @property
@@ -270,35 +268,11 @@ class LiveRig:
 
     def step(self, n_steps: int) -> np.ndarray:
         """Advance ``n_steps`` physics steps; returns the log rows recorded meanwhile."""
-        self.step_start(n_steps)
-        return self.step_finish()
-
-    def step_start(self, n_steps: int, submit=None) -> None:
-        """The first half of :meth:`step`: with ``submit`` (``submit(fn, args)``, e.g.
-        :meth:`~rig_emulator.link.step_worker.StepWorker.submit`) the compiled loop is handed to it to
-        run on another thread (it releases the GIL) and this returns at once; nothing of the rig may be
-        read or commanded until :meth:`step_finish` returned (take the snapshot before). A chunk within
-        which a configured timed fault switches on runs here, as :meth:`step` does."""
         if n_steps > self.chunk_steps_max:
             raise ValueError(f"step({n_steps}): at most {self.chunk_steps_max} steps per call")
         sim = self.sim
         sim.log_row = 0
-        if submit is None or sim.timed_faults_within(n_steps) or isinstance(sim.plugin.fn, WrapperAddressProtocol):
-            # a plug-in called as Python (a ctypes callback) keeps to the calling thread
-            sim.advance(n_steps)
-            self._stepping = (n_steps, None)
-        else:
-            entry, args = sim.advance_call(n_steps)
-            self._stepping = (n_steps, submit(entry, args))
-
-    def step_finish(self) -> np.ndarray:
-        """The second half of :meth:`step` (waits for the compiled loop when it was handed off);
-        returns the log rows recorded meanwhile. The loop's exception, if any, is raised here."""
-        n_steps, result = self._stepping
-        self._stepping = None
-        sim = self.sim
-        if result is not None:
-            sim.advance_done(n_steps, result())
+        sim.advance(n_steps)
         n_rows = sim.log_row
         rows = sim.log[:n_rows]
         if n_rows:  # the supply's charge and energy, integrated over the recorded rows

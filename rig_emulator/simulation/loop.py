@@ -76,7 +76,7 @@ def _sense(k, x, pp, sp, ss, rng, omega_dot):
         ss.health[1] = load_cell_filter_step(ss.cell_raw, sp.lcp, ss.lcs, ss.thrust_est)
 
 
-@jit(nrt=False, python=True, nogil=True)  # Python's entry point (releases the GIL: the served rig steps on a worker thread); rng_bits: rng_bits.py
+@jit(nrt=False, python=True)  # Python's entry point; see rig_emulator/simulation/rng_bits.py for rng_bits
 def run_steps(
     k_start, n_steps, dt, ctrl_div, log_div,
     x, v_cmd, pp, cp, gp, wind, gusts, shocks, extra,

@@ -170,19 +170,6 @@ class Simulation:
         (:mod:`rig_emulator.simulation.entry_points`): a new rig of a known shape finds its
         entry point in tens of microseconds instead of milliseconds.
         """
-        entry, args = self.advance_call(n_steps)
-        self.advance_done(n_steps, entry(*args))
-
-    def timed_faults_within(self, n_steps: int) -> bool:
-        """Whether a configured timed fault switches on within the next ``n_steps`` steps (then
-        :meth:`advance` calls the loop in pieces and :meth:`advance_call` cannot stand for it)."""
-        return bool(self._pending_faults) and self._pending_faults[0][0] < self.k + n_steps
-
-    def advance_call(self, n_steps: int) -> tuple:
-        """``(entry, args)``: the compiled loop's entry point and its arguments for the next ``n_steps``
-        steps (:meth:`_advance` calls it; the served rig calls it on a worker thread, the loop releases
-        the GIL). The call mutates this simulation's arrays: nothing may read or change them until it
-        returned and :meth:`advance_done` took its result."""
         d = self.dist
         args = (
             self.k, n_steps, self.dt, self.ctrl_div, self.log_div,
@@ -193,11 +180,7 @@ class Simulation:
             self.plugin.params, self.plugin.fn,
         )
         # the scalars between the objects (log_row, armed) are left out of the lookup's key
-        return self._loop(args, args[5:23] + args[25:]), args
-
-    def advance_done(self, n_steps: int, log_row: int) -> None:
-        """Take the result of the call :meth:`advance_call` gave (the log row it returned)."""
-        self.log_row = log_row
+        self.log_row = self._loop(args, args[5:23] + args[25:])(*args)
         self.k += n_steps
         if self.plugin.params.status[0] != 0 and self.plugin_failure is None:
             self._plugin_failed()
