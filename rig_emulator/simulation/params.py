@@ -35,7 +35,8 @@ ControlParams = namedtuple(
     "max_tilt ref_omega smc_k smc_lam smc_boundary smc_phi smcp_k smcp_lam smcp_phi "
     "flc_phi flc_theta flc_psi flc_x flc_y flc_z rule_table flc_rate_share "
     "pida_kp pida_ki pida_kd pidp_kp pidp_ki pidp_kd pid_limit "
-    "thrust_loop_rate thrust_loop_limit",  # the load-cell thrust loop (control/thrust_loop.py): 1/T (0 = off), N
+    "thrust_loop_rate thrust_loop_limit "  # the load-cell thrust loop (control/thrust_loop.py): 1/T (0 = off), N
+    "alloc_thrust_first",  # control.allocation_priority == "thrust" (control/allocation.py)
 )
 
 GuidanceParams = namedtuple(
@@ -257,6 +258,7 @@ def control_params(cfg: RigConfig) -> ControlParams:
         pid_limit=cfg["pid.integral_limit"],
         thrust_loop_rate=_thrust_loop_rate(cfg),
         thrust_loop_limit=cfg["motors.thrust_loop_limit_grf"] * GRAM_FORCE_N,
+        alloc_thrust_first=cfg["control.allocation_priority"] == "thrust",
         **_flc_axes(cfg),
     )
 
