@@ -18,7 +18,7 @@ in both:
   u1 in its first step (the altitude law, third row of Eq. 33) and the attitude inputs u2, u3
   last: the collective u1 is kept (clamped to ``[0, 4 f_max]``) and the roll/pitch
   differential is scaled down, direction kept, until every motor fits around it
-  (:func:`thrust_first_scale`). docs/REPRODUCTION.md, "The allocation's priority".
+  (:func:`thrust_first_scale`). docs/REPRODUCTION.md, "Table 6's altitude".
 """
 
 from rig_emulator._jit import jit
