@@ -4,7 +4,9 @@ the jump at t = 12 s through the mixer").
 
     python scripts/table6_study.py candidates --priority attitude [--workers N]   # each candidate switched off
     python scripts/table6_study.py candidates --priority thrust [--workers N]     # the same, the shipped mixer
+    python scripts/table6_study.py candidates --priority clip --shipped-only   # per-motor clipping, first row
     python scripts/table6_study.py priority [--workers N]     # the allocation's priority x CoG height
+    python scripts/table6_study.py priority --priorities clip --cog-mm 0,10,20   # the third reading
     python scripts/table6_study.py bias [--workers N]         # the common thrust bias: both Z within x2?
     python scripts/table6_study.py rectangle [--workers N]    # the rectangle's ME X / Y per leg direction
 
@@ -95,10 +97,10 @@ def candidates(workers, settings=None, priority="attitude"):
               f"{_m(b, 'theta_deg'):.3f}{f' ({fs} failsafe trips)' if fs else ''} |", flush=True)
 
 
-def priority(workers):
-    settings = {f"{p}, CoG {cz * 1e3:g} mm below": {"control.allocation_priority": p,
-                                                       "joint.cog_offset": [0.008, -0.008, cz]}
-                for p in ("attitude", "thrust") for cz in (0.0, 0.01, 0.02, 0.035, 0.05)}
+def priority(workers, priorities=("attitude", "thrust"), cog_mm=(0.0, 10.0, 20.0, 35.0, 50.0)):
+    settings = {f"{p}, CoG {cz:g} mm below": {"control.allocation_priority": p,
+                                                "joint.cog_offset": [0.008, -0.008, cz * 1e-3]}
+                for p in priorities for cz in cog_mm}
     out = _run(settings, workers, strategies=("flc",))
     print("| allocation priority, CoG height | FLC ME Z per seed (m) | FLC ME theta per seed (deg) | failsafe trips |")
     print("|---|---|---|---|")
@@ -149,13 +151,24 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("study", choices=("candidates", "priority", "bias", "rectangle"))
     ap.add_argument("--workers", type=int, default=None)
-    ap.add_argument("--priority", choices=("attitude", "thrust"), default="attitude",
+    ap.add_argument("--priority", choices=("attitude", "thrust", "clip"), default="attitude",
                     help="control.allocation_priority under the candidates and bias rows")
+    ap.add_argument("--shipped-only", action="store_true",
+                    help="candidates: only the first row (hilms as shipped)")
+    ap.add_argument("--priorities", default="attitude,thrust",
+                    help="priority: the control.allocation_priority values, comma-separated")
+    ap.add_argument("--cog-mm", default="0,10,20,35,50",
+                    help="priority: the CoG heights below the joint (mm), comma-separated")
     a = ap.parse_args()
-    if a.study in ("candidates", "bias"):
-        {"candidates": candidates, "bias": bias}[a.study](a.workers, priority=a.priority)
+    if a.study == "candidates":
+        rows = {k: v for k, v in list(CANDIDATES.items())[:1]} if a.shipped_only else None
+        candidates(a.workers, rows, priority=a.priority)
+    elif a.study == "bias":
+        bias(a.workers, priority=a.priority)
+    elif a.study == "priority":
+        priority(a.workers, tuple(a.priorities.split(",")), tuple(float(c) for c in a.cog_mm.split(",")))
     else:
-        {"priority": priority, "rectangle": rectangle}[a.study](a.workers)
+        rectangle(a.workers)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Control allocation: inverse of A6 with saturation that keeps attitude authority first.
+"""Control allocation: inverse of A6 and what gives way when a motor saturates.
 
 A6: ``u1 = F1 + F2 + F3 + F4``, ``u2 = l (F4 - F2)``, ``u3 = l (F1 - F3)``,
 ``u4 = c (F1 - F2 + F3 - F4)`` with ``c = kM / kF``; (u2, u3, u4) are torques about the
@@ -7,18 +7,23 @@ body axes of B (FRD). The controllers produce torques about the axes of the Eule
 place that converts them.
 
 When the exact inverse keeps every motor in ``[0, f_max]`` it is used as is. Otherwise one of
-two priorities (``control.allocation_priority``) decides what gives way; yaw gets what is left
-in both:
+three readings (``control.allocation_priority``, passed as ``priority``: PRIORITY_*) decides what
+gives way; in the first two yaw gets what is left:
 
-* ``"attitude"`` (``thrust_first`` False; the ideal plant, the emulator before issue 13's
+* ``"attitude"`` (PRIORITY_ATTITUDE; the ideal plant, the emulator before issue 13's
   table6 study): roll/pitch first (scaled down only if their differential alone exceeds the
   range), then the collective is shifted to fit. Around hover the motors have more room below
   (down to 0) than above (up to ``f_max``), so a saturated roll/pitch command lowers u1.
-* ``"thrust"`` (``thrust_first`` True; the ``hilms`` rig): Reading of Sec. 3-3, which computes
+* ``"thrust"`` (PRIORITY_THRUST; the ``hilms`` rig): Reading of Sec. 3-3, which computes
   u1 in its first step (the altitude law, third row of Eq. 33) and the attitude inputs u2, u3
   last: the collective u1 is kept (clamped to ``[0, 4 f_max]``) and the roll/pitch
   differential is scaled down, direction kept, until every motor fits around it
   (:func:`thrust_first_scale`). docs/REPRODUCTION.md, "Table 6's altitude".
+* ``"clip"`` (PRIORITY_CLIP): no priority at all. Sec. 3-3's firmware computes u1..u4, the four
+  motor thrusts through the A6 inverse and each motor's voltage through Eq. 40's inverse; the
+  supply (15 V, Fig. 11) caps each motor on its own, so each thrust is clipped to ``[0, f_max]``
+  independently. Only the overflow is lost: a saturated pitch command loses part of its torque
+  AND part of the collective, and yaw whatever the clipped motors carried.
 """
 
 from rig_emulator._jit import jit
@@ -26,6 +31,11 @@ from rig_emulator._jit import jit
 SATURATED_ROLL_PITCH = 1
 SATURATED_COLLECTIVE = 2
 SATURATED_YAW = 4
+
+PRIORITY_ATTITUDE = 0  # control.allocation_priority "attitude"
+PRIORITY_THRUST = 1  # "thrust"
+PRIORITY_CLIP = 2  # "clip"
+PRIORITIES = {"attitude": PRIORITY_ATTITUDE, "thrust": PRIORITY_THRUST, "clip": PRIORITY_CLIP}
 
 
 @jit(inline="always")
@@ -35,9 +45,9 @@ def euler_torque_to_body(tx, ty, tz):
 
 
 @jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
-def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, thrust_first, forces):
+def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, priority, forces):
     """Motor thrusts ``forces[0:4]`` (N) realising (u1..u4) as closely as the limits allow;
-    ``thrust_first``: the saturation priority (module docstring).
+    ``priority``: what gives way when saturating, a PRIORITY_* (module docstring).
 
     Returns a bitmask of SATURATED_* flags (0 when A6 is inverted exactly).
     """
@@ -61,6 +71,9 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, thrust_first, forces
         forces[2] = _clip(e3, f_max)
         forces[3] = _clip(e4, f_max)
         return flags
+    if priority == PRIORITY_CLIP:
+        return _clip_each(e1, e2, e3, e4, collective, r1, r2, r3, r4, y, tol, f_max, forces)
+    thrust_first = priority == PRIORITY_THRUST
     hi_rp = max(max(r1, r2), max(r3, r4))
     lo_rp = min(min(r1, r2), min(r3, r4))
     span = hi_rp - lo_rp
@@ -112,6 +125,29 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, thrust_first, forces
     forces[1] = _clip(base2 - s * y, f_max)
     forces[2] = _clip(base3 + s * y, f_max)
     forces[3] = _clip(base4 - s * y, f_max)
+    return flags
+
+
+@jit(inline="always")
+def _clip_each(e1, e2, e3, e4, collective, r1, r2, r3, r4, y, tol, f_max, forces):
+    """The "clip" reading: each motor clipped to [0, f_max] on its own; the flags name what the
+    clipped thrusts no longer realise (collective, roll/pitch differential, yaw)."""
+    f1 = _clip(e1, f_max)
+    f2 = _clip(e2, f_max)
+    f3 = _clip(e3, f_max)
+    f4 = _clip(e4, f_max)
+    forces[0] = f1
+    forces[1] = f2
+    forces[2] = f3
+    forces[3] = f4
+    flags = 0
+    if abs(0.25 * (f1 + f2 + f3 + f4) - collective) > tol:
+        flags |= SATURATED_COLLECTIVE
+    # per-motor roll/pitch parts: a = (f1 - f3) / 2 (u3), b = (f4 - f2) / 2 (u2)
+    if abs(0.5 * (f1 - f3) - r1) > tol or abs(0.5 * (f4 - f2) - r4) > tol:
+        flags |= SATURATED_ROLL_PITCH
+    if abs(0.25 * (f1 - f2 + f3 - f4) - y) > tol:
+        flags |= SATURATED_YAW
     return flags
 
 

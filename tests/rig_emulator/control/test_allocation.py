@@ -1,11 +1,13 @@
 """A6 inverted: exact round trip inside the limits; when saturating, attitude authority kept first
-(priority "attitude") or the collective u1 kept first (priority "thrust", the hilms rig)."""
+(priority "attitude"), the collective u1 kept first (priority "thrust", the hilms rig) or each motor
+clipped on its own (priority "clip", no priority)."""
 
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rig_emulator.control.allocation import (
+    PRIORITY_CLIP,
     SATURATED_COLLECTIVE,
     SATURATED_ROLL_PITCH,
     SATURATED_YAW,
@@ -117,6 +119,49 @@ def test_saturated_pitch_at_hover_sign_and_size():
     scale = (FMAX - HOVER / 4) / (u3 / (2 * L))
     assert abs(u3t - scale * u3) < 1e-9 and 0.50 < scale < 0.52  # 0.86 N m
     assert thr[0] == FMAX and abs(thr[2] - (HOVER / 2 - FMAX)) < 1e-9  # motor 1 at its ceiling, motor 3 below hover
+
+
+def test_saturated_pitch_at_hover_clip_sign_and_size():
+    """The same request with each motor clipped on its own (priority "clip"): motor 1 asks
+    m g / 4 + 3.0 N = 8.47 N and gets f_max = 7.00 N, motor 3 gets its 2.47 N. Only the overflow
+    (1.47 N) is lost, from the collective AND the torque: u1 = m g - 1.47 N = 20.4 N (attitude: 16.0 N,
+    thrust: 21.9 N), u3 = l (7.00 - 2.47) N = 1.27 N m, 0.76 of the 1.68 N m asked (attitude 1.00,
+    thrust 0.51); the clipped motor 1 also leaves a yaw torque -c 1.47 N the mixer did not ask."""
+    u3 = 3 * 0.56
+    out = np.zeros(4)
+    flags = allocate(HOVER, 0.0, u3, 0.0, L, C, FMAX, PRIORITY_CLIP, out)
+    assert flags == SATURATED_COLLECTIVE | SATURATED_ROLL_PITCH | SATURATED_YAW
+    over = HOVER / 4 + u3 / (2 * L) - FMAX  # 1.47 N over motor 1's ceiling
+    assert 1.46 < over < 1.48
+    assert out[0] == FMAX and abs(out[2] - (HOVER / 4 - u3 / (2 * L))) < 1e-12
+    assert out[1] == out[3] == HOVER / 4
+    a1, a2, a3, a4 = _a6(out)
+    assert abs(a1 - (HOVER - over)) < 1e-9 and 20.3 < a1 < 20.5          # between 16.0 (attitude) and 21.9 (thrust)
+    assert abs(a3 - (u3 - L * over)) < 1e-9 and 0.75 < a3 / u3 < 0.77    # between 0.51 (thrust) and 1 (attitude)
+    assert a2 == 0.0 and abs(a4 + C * over) < 1e-12                       # an unasked yaw torque, opposite sign
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(-50, 80), st.floats(-3, 3), st.floats(-3, 3), st.floats(-1, 1))
+def test_clip_is_the_exact_inverse_clipped_motor_by_motor(u1, u2, u3, u4):
+    out = np.zeros(4)
+    flags = allocate(u1, u2, u3, u4, L, C, FMAX, PRIORITY_CLIP, out)
+    a = u3 / (2 * L)
+    b = u2 / (2 * L)
+    y = u4 / (4 * C)
+    exact = np.array([u1 / 4 + a + y, u1 / 4 - b - y, u1 / 4 - a + y, u1 / 4 + b - y])
+    assert np.allclose(out, np.clip(exact, 0.0, FMAX), atol=1e-12)
+    if flags == 0:
+        assert np.allclose(out, exact, atol=4e-9 * FMAX)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(0.0, FMAX), min_size=4, max_size=4))
+def test_clip_round_trip_inside_limits(forces):
+    f = np.array(forces)
+    out = np.zeros(4)
+    assert allocate(*_a6(f), L, C, FMAX, PRIORITY_CLIP, out) == 0
+    assert np.allclose(out, f, atol=1e-9)
 
 
 def test_thrust_first_scale_sign_and_size():
