@@ -83,3 +83,18 @@ def test_the_mixer_priority_decides_the_flc_altitude_drop_after_the_jump():
     assert attitude_first > 1.5
     assert 0.05 < thrust_first < 0.4
     assert abs(thrust_first - smc_flc) < 0.1
+
+
+def test_per_motor_clipping_lets_the_flc_yaw_law_take_the_motors():
+    """docs/REPRODUCTION.md, "Table 6's altitude", the third reading ("clip": each motor clipped on its
+    own, no priority): Table 3's FLC yaw output (up to 3 d1_u4 = 2.31 N m, 24x the 0.098 N m four
+    motors give around hover) is no longer scaled into what is left, turns motors 1 and 3 off and the
+    FLC loses the helix about 1 s after it starts (failsafe at 4.0 s, seeds 0-2); with the yaw output
+    inside the motors' room (d1_u4 = 0.03 N m) the same mixer flies it."""
+    def tripped(**extra):
+        s = simulate("helix", strategy="flc", duration=6.0, seed=0,
+                     overrides={"control.allocation_priority": "clip", **extra}).series
+        return bool(np.max(s["failsafe"]) > 0)
+
+    assert tripped()
+    assert not tripped(**{"flc.d1_u4": 0.03})
