@@ -23,7 +23,9 @@ gives way; in the first two yaw gets what is left:
   motor thrusts through the A6 inverse and each motor's voltage through Eq. 40's inverse; the
   supply (15 V, Fig. 11) caps each motor on its own, so each thrust is clipped to ``[0, f_max]``
   independently. Only the overflow is lost: a saturated pitch command loses part of its torque
-  AND part of the collective, and yaw whatever the clipped motors carried.
+  AND part of the collective, and yaw whatever the clipped motors carried. Measured on ``hilms``
+  (docs/REPRODUCTION.md, "Table 6's altitude", the third reading): Table 3's FLC yaw output then
+  takes the motors and the FLC loses the helix, so it is available, not the default.
 """
 
 from rig_emulator._jit import jit
