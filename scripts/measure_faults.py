@@ -28,6 +28,8 @@ from rig_emulator.api import simulate
 from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_ESTIMATE, ALERT_RATE
 
 T_FAULT = 5.0
+HEAD = ("| case | est [deg] | track [deg] | yaw rate [deg/s] | drift [m] | failsafe | after |\n"
+        "|---|---|---|---|---|---|---|")
 
 
 def _events(device, indices, mode, magnitude):
@@ -82,34 +84,48 @@ def case(scenario, strategy, events, seeds, extra=None):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a string config override on every case (e.g. control.allocation_priority=clip)")
+    ap.add_argument("--motor-only", action="store_true", help="only the motor thrust-loss table")
     args = ap.parse_args()
     seeds = args.seeds
-    head = ("| case | est [deg] | track [deg] | yaw rate [deg/s] | drift [m] | failsafe | after |\n"
-            "|---|---|---|---|---|---|---|")
+    common = dict(kv.split("=", 1) for kv in args.set)
+    if args.motor_only:
+        _motor_table(seeds, common)
+        return
+    _all_tables(seeds, common)
+
+
+def _all_tables(seeds, common):
+    head = HEAD
     imu_modes = (("stuck", 0.0), ("dead", 0.0), ("bias", 3000.0), ("noise", 50.0))
 
     print(f"IMU modules (hover, smc-flc, robust_mean ensemble; seeds {seeds})\n{head}")
     for n in (1, 2, 3):
         for mode, mag in imu_modes:
             ev = _events("imu", range(n), mode, mag)
-            print(f"| {n} x {mode} {mag:g} |", case("hover", "smc-flc", ev, seeds)[2:])
+            print(f"| {n} x {mode} {mag:g} |", case("hover", "smc-flc", ev, seeds, common)[2:])
     print(f"\nIMU modules while moving (harmonic attitude, smc-flc; seeds {seeds})\n{head}")
     for mode, mag in imu_modes:
-        print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds)[2:])
+        print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds, common)[2:])
     print(f"\nsame, plain mean ensemble (the paper's)\n{head}")
     for mode, mag in imu_modes:
         print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds,
-                                               {"estimation.ensemble": "mean"})[2:])
+                                               {**common, "estimation.ensemble": "mean"})[2:])
 
     print(f"\nload cells (hover, smc-flc; seeds {seeds})\n{head}")
     for mode, mag in (("dead", 0.0), ("spike", 200.0), ("stuck", 0.0)):
-        print(f"| cell 2 {mode} {mag:g} |", case("hover", "smc-flc", _events("load_cell", [2], mode, mag), seeds)[2:])
+        print(f"| cell 2 {mode} {mag:g} |", case("hover", "smc-flc", _events("load_cell", [2], mode, mag), seeds, common)[2:])
 
-    print(f"\nmotor 1 thrust loss (hover; seeds {seeds})\n{head}")
+    _motor_table(seeds, common)
+
+
+def _motor_table(seeds, common):
+    print(f"\nmotor 1 thrust loss (hover; seeds {seeds}; {common or 'preset'})\n{HEAD}")
     for strategy in ("smc-flc", "flc", "pid"):
         for loss in (0.1, 0.2, 0.3, 0.5, 1.0):
             ev = _events("motor", [1], "thrust_loss", loss)
-            print(f"| {strategy} {100 * loss:.0f} % |", case("hover", strategy, ev, seeds)[2:])
+            print(f"| {strategy} {100 * loss:.0f} % |", case("hover", strategy, ev, seeds, common)[2:], flush=True)
 
 
 if __name__ == "__main__":

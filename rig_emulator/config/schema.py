@@ -162,6 +162,12 @@ SCHEMA: dict[str, Spec] = {
     "control.reference_time_constant": F(
         "time constant of the filter that gives desired-attitude rates and accelerations", "s", 0.0, 1.0, lo_open=True
     ),
+    "control.allocation_priority": S("what gives way when the A6 inverse leaves a motor outside [0, its ceiling]: "
+                                     "'attitude' roll/pitch kept, the collective u1 shifted to fit (ideal plant); "
+                                     "'thrust' u1 kept, the roll/pitch differential scaled down (Sec. 3-3 computes u1 "
+                                     "first; docs/REPRODUCTION.md, \"Table 6's altitude\"); 'clip' no priority, each motor clipped "
+                                     "to [0, its ceiling] on its own (a plain firmware: Sec. 3-3's A6 and Eq. 40 "
+                                     "inverses, the supply capping each motor)", ("attitude", "thrust", "clip")),
     "control.actuation_delay": F("sensing-to-actuation delay: computation, PWM frame, ESC update; rounded to whole "
                                  "physics steps (0 = none)", "s", 0.0, 0.1),
     "controller_model.inertia_scale": V3("the inertia the controllers' model believes / the true Ixx, Iyy, Izz "

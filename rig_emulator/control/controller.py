@@ -242,7 +242,7 @@ def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, co
     """Allocation (A6 inverse) of (u1 N, u2..u4 N m about the body axes) to motor thrusts and
     voltages; records what was decided in ``cout``. Returns the flags."""
     forces = cout[OUT_THRUST_CMD : OUT_THRUST_CMD + 4]
-    flags |= allocate(u1, u2, u3, u4, cp.arm_length, cp.km_over_kf, cp.f_max, forces)
+    flags |= allocate(u1, u2, u3, u4, cp.arm_length, cp.km_over_kf, cp.f_max, cp.alloc_priority, forces)
     for i in range(4):
         cstate[CS_THRUST + i] = forces[i]
         v_cmd[i] = voltage_for_thrust(forces[i], cp.k_v, cp.v_max)

@@ -15,6 +15,7 @@ import numpy as np
 
 from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.control import fuzzy
+from rig_emulator.control.allocation import PRIORITIES
 from rig_emulator.control.strategies import laws
 from rig_emulator.guidance.offboard import OFB_SIZE
 from rig_emulator.guidance.runner import GUIDANCE_CODES
@@ -35,7 +36,8 @@ ControlParams = namedtuple(
     "max_tilt ref_omega smc_k smc_lam smc_boundary smc_phi smcp_k smcp_lam smcp_phi "
     "flc_phi flc_theta flc_psi flc_x flc_y flc_z rule_table flc_rate_share "
     "pida_kp pida_ki pida_kd pidp_kp pidp_ki pidp_kd pid_limit "
-    "thrust_loop_rate thrust_loop_limit",  # the load-cell thrust loop (control/thrust_loop.py): 1/T (0 = off), N
+    "thrust_loop_rate thrust_loop_limit "  # the load-cell thrust loop (control/thrust_loop.py): 1/T (0 = off), N
+    "alloc_priority",  # control.allocation_priority as a PRIORITY_* int (control/allocation.py)
 )
 
 GuidanceParams = namedtuple(
@@ -257,6 +259,7 @@ def control_params(cfg: RigConfig) -> ControlParams:
         pid_limit=cfg["pid.integral_limit"],
         thrust_loop_rate=_thrust_loop_rate(cfg),
         thrust_loop_limit=cfg["motors.thrust_loop_limit_grf"] * GRAM_FORCE_N,
+        alloc_priority=PRIORITIES[cfg["control.allocation_priority"]],
         **_flc_axes(cfg),
     )
 

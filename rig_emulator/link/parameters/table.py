@@ -138,6 +138,7 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "motors.thrust_loop_time_constant": ("MOT_TLOOP_T", None),
     "motors.thrust_loop_limit_grf": ("MOT_TLOOP_LIM", None),
     "control.actuation_delay": ("CTL_DELAY", None),
+    "control.allocation_priority": ("CTL_ALLOC_PRIO", None),
     "controller_model.inertia_scale": ("MDL_I", ATT),
     "controller_model.arm_length_scale": ("MDL_ARM", None),
     "controller_model.thrust_per_volt_scale": ("MDL_KV", None),

@@ -60,3 +60,41 @@ def test_joint_friction_brings_a_disarmed_tumbling_rig_to_rest_in_seconds():
     assert _tumble("hilms", 10.0) < 0.05  # at rest (a pendulum's last sway of a few hundredths)
     assert _tumble("hilms-ideal", 10.0) > 5.0  # frictionless joint: it spins on for ever (issue 13)
     assert math.isfinite(_tumble("hilms", 1.0))
+
+
+def _drop_after_jump(strategy: str, priority: str) -> float:
+    """Largest fall of the rig's own altitude below Z_des after Eq. 46's X/Y jump at t = 12 s (m),
+    20 s helix on the hardware rig, seed 0, with ``control.allocation_priority = priority``."""
+    s = simulate("helix", strategy=strategy, duration=20.0, seed=0,
+                 overrides={"control.allocation_priority": priority}).series
+    after = s["t"] >= 12.0
+    return float(np.max((s["pos_des"][:, 2] - s["pos"][:, 2])[after]))
+
+
+def test_the_mixer_priority_decides_the_flc_altitude_drop_after_the_jump():
+    """docs/REPRODUCTION.md, "Table 6's altitude": the FLC answers the jump with a saturated pitch
+    transient; the roll/pitch-first mixer pays for it with u1 (the rig falls about 2 m, seeds 0-2:
+    2.0-2.5 m), the u1-first mixer of the hardware rig does not (0.17 m, as the SMC-FLC's 0.17-0.28 m)."""
+    assert load_config("hilms")["control.allocation_priority"] == "thrust"
+    assert load_config("hilms-ideal")["control.allocation_priority"] == "attitude"
+    attitude_first = _drop_after_jump("flc", "attitude")
+    thrust_first = _drop_after_jump("flc", "thrust")
+    smc_flc = _drop_after_jump("smc-flc", "thrust")
+    assert attitude_first > 1.5
+    assert 0.05 < thrust_first < 0.4
+    assert abs(thrust_first - smc_flc) < 0.1
+
+
+def test_per_motor_clipping_lets_the_flc_yaw_law_take_the_motors():
+    """docs/REPRODUCTION.md, "Table 6's altitude", the third reading ("clip": each motor clipped on its
+    own, no priority): Table 3's FLC yaw output (up to 3 d1_u4 = 2.31 N m, 24x the 0.098 N m four
+    motors give around hover) is no longer scaled into what is left, turns motors 1 and 3 off and the
+    FLC loses the helix about 1 s after it starts (failsafe at 4.0 s, seeds 0-2); with the yaw output
+    inside the motors' room (d1_u4 = 0.03 N m) the same mixer flies it."""
+    def tripped(**extra):
+        s = simulate("helix", strategy="flc", duration=6.0, seed=0,
+                     overrides={"control.allocation_priority": "clip", **extra}).series
+        return bool(np.max(s["failsafe"]) > 0)
+
+    assert tripped()
+    assert not tripped(**{"flc.d1_u4": 0.03})
