@@ -31,7 +31,8 @@ class MAVProxySession:
     def __init__(self, tcp_url: str, state_dir, args=()):
         port = tcp_url.rsplit(":", 1)[1]
         self.proc = subprocess.Popen(
-            [sys.executable, str(MAVPROXY), f"--master=tcp:127.0.0.1:{port}", f"--state-basedir={state_dir}",
+            # -u: MAVProxy writes some output (e.g. `status`) to a block-buffered pipe without a flush
+            [sys.executable, "-u", str(MAVPROXY), f"--master=tcp:127.0.0.1:{port}", f"--state-basedir={state_dir}",
              *args],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=state_dir)
         self.all: list[str] = []

@@ -58,7 +58,8 @@ def test_mavproxy_waits_out_a_slow_start(tmp_path):
     try:
         port = next(u for u in rig.urls if u.startswith("udpin:")).rsplit(":", 1)[1]
         proc = subprocess.Popen(
-            [sys.executable, str(MAVPROXY), f"--master=udpout:127.0.0.1:{port}", f"--state-basedir={tmp_path}"],
+            # -u: `status` writes to stdout without a flush; piped, it could wait in the buffer past the timeout
+            [sys.executable, "-u", str(MAVPROXY), f"--master=udpout:127.0.0.1:{port}", f"--state-basedir={tmp_path}"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path)
         out = _Lines(proc)
         try:
