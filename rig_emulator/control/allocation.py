@@ -74,12 +74,10 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, priority, forces):
         forces[3] = _clip(e4, f_max)
         return flags
     if priority == PRIORITY_CLIP:
-        return _clip_each(e1, e2, e3, e4, collective, r1, r2, r3, r4, y, tol, f_max, forces)
-    thrust_first = priority == PRIORITY_THRUST
+        return _clip_each(e1, e2, e3, e4, collective, r1, r4, y, tol, f_max, forces)
     hi_rp = max(max(r1, r2), max(r3, r4))
     lo_rp = min(min(r1, r2), min(r3, r4))
-    span = hi_rp - lo_rp
-    if thrust_first:
+    if priority == PRIORITY_THRUST:
         if collective < 0.0:
             collective = 0.0
             flags |= SATURATED_COLLECTIVE
@@ -93,16 +91,17 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, priority, forces):
             r3 *= scale
             r4 *= scale
             flags |= SATURATED_ROLL_PITCH
-    elif span > f_max:
-        scale = f_max / span
-        r1 *= scale
-        r2 *= scale
-        r3 *= scale
-        r4 *= scale
-        hi_rp *= scale
-        lo_rp *= scale
-        flags |= SATURATED_ROLL_PITCH
-    if not thrust_first:
+    else:
+        span = hi_rp - lo_rp
+        if span > f_max:
+            scale = f_max / span
+            r1 *= scale
+            r2 *= scale
+            r3 *= scale
+            r4 *= scale
+            hi_rp *= scale
+            lo_rp *= scale
+            flags |= SATURATED_ROLL_PITCH
         lo_c = -lo_rp
         hi_c = f_max - hi_rp
         if collective < lo_c:
@@ -131,9 +130,10 @@ def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, priority, forces):
 
 
 @jit(inline="always")
-def _clip_each(e1, e2, e3, e4, collective, r1, r2, r3, r4, y, tol, f_max, forces):
+def _clip_each(e1, e2, e3, e4, collective, r1, r4, y, tol, f_max, forces):
     """The "clip" reading: each motor clipped to [0, f_max] on its own; the flags name what the
-    clipped thrusts no longer realise (collective, roll/pitch differential, yaw)."""
+    clipped thrusts no longer realise (collective, roll/pitch differential: ``r1`` = u3 / 2l and
+    ``r4`` = u2 / 2l per motor, yaw)."""
     f1 = _clip(e1, f_max)
     f2 = _clip(e2, f_max)
     f3 = _clip(e3, f_max)

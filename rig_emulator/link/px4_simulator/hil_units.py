@@ -54,13 +54,9 @@ def saturate(value: float, limit: float) -> float:
 
 
 def saturate_xyz(vector, limit: float) -> tuple:
-    """:func:`saturate` of the three components of ``vector`` (as floats), in one call."""
+    """:func:`saturate` of the three components of ``vector`` (as floats)."""
     x, y, z = map(float, vector)
-    lo = -limit
-    x = lo if lo > x else x
-    y = lo if lo > y else y
-    z = lo if lo > z else z
-    return (limit if limit < x else x), (limit if limit < y else y), (limit if limit < z else z)
+    return saturate(x, limit), saturate(y, limit), saturate(z, limit)
 
 
 def cm_u16(length_m: float) -> int:

@@ -131,10 +131,6 @@ class Px4SimulatorServer:
             readable = select_(fds, [], [], timeout)[0]
             if not readable:
                 continue
-            if s is not None and len(readable) == 1 and readable[0] is s.conn:  # a step's answer, and nothing else
-                if not s.on_readable():
-                    self._end_session()
-                continue
             # the session first: a flight stack that closed and reconnected at once is over before the new one
             if s is not None and s.conn in readable and not s.on_readable():
                 self._end_session()

@@ -92,20 +92,17 @@ class SimulatorSession:
             return True
         for msg in msgs:
             kind = msg.get_type()
-            if kind == "HIL_ACTUATOR_CONTROLS":
-                self.counters.received += 1
-                self._actuators(msg)
-            elif kind == "BAD_DATA" or kind.startswith("UNKNOWN"):
+            if kind == "BAD_DATA" or kind.startswith("UNKNOWN"):
                 self.counters.drop("bad_data")
                 continue
+            self.counters.received += 1
+            if kind == "HIL_ACTUATOR_CONTROLS":
+                self._actuators(msg)
             elif kind == "COMMAND_LONG":
-                self.counters.received += 1
                 self._command(msg)
             elif kind == "HEARTBEAT":
-                self.counters.received += 1
                 self.peer_heartbeat = (msg.get_srcSystem(), msg.get_srcComponent(), msg.autopilot)
             else:
-                self.counters.received += 1
                 self.counters.drop("unhandled")
             if not self.conn.open:
                 return False

@@ -92,16 +92,7 @@ class Connection:
     def write(self, data: bytes) -> bool:
         """Send all of ``data`` (waits while the peer's buffer is full, up to SEND_TIMEOUT_S);
         False when the stream broke."""
-        try:
-            n = self._send(data)
-        except (BlockingIOError, InterruptedError):
-            n = 0
-        except OSError:
-            self.close()
-            return False
-        if n == len(data):  # all of it at once (a step's messages, almost always)
-            return True
-        view = memoryview(data)[n:]
+        view = memoryview(data)
         deadline = None
         while view:
             try:
