@@ -1,7 +1,8 @@
-"""The position FLC on the hardware plant (``hilms``: ``flc.position_rate_share`` 0.65, the
-error rate partly on the measurement) follows an offboard velocity set-point in full: an axis
-without a position reference tracks v_des - v. With the share applied to the velocity
-set-point too it settled at 0.65 x v_des (0.34 of a 0.5 m/s command, measured before the fix)."""
+"""The position FLC on the hardware plant (``hilms``: ``flc.position_rate_share`` below 1, 0.45
+since 2026-11-24, the error rate partly on the measurement) follows an offboard velocity set-point
+in full: an axis without a position reference tracks v_des - v. With the share applied to the
+velocity set-point too it settled at share x v_des (0.34 of a 0.5 m/s command at 0.65, measured
+before the fix)."""
 
 import math
 

@@ -1,0 +1,112 @@
+"""The paper's 18 numbers (Table 4, Table 6, Fig. 19) on ``hilms`` over a scan of one setting, mean
+over seeds 0-2 (docs/REPRODUCTION.md, "The position FLC's rate share" and "Table 6's yaw").
+
+    python scripts/paper_numbers_scan.py rate-share [--values 0.2,0.25,...] [--workers N]
+    python scripts/paper_numbers_scan.py yaw [--values 0.005,0.03,0.06] [--set KEY=VALUE ...]
+    python scripts/paper_numbers_scan.py point [--set KEY=VALUE ...]     # one setting, all 18 numbers
+
+Every point runs the job list of ``rig-gcs identify --paper`` (the reproduction's own sweep, helix
+and rectangle runs: 29 headless runs a seed) with the setting as an override, so its numbers are the
+ones a fit and ``rig-gcs reproduce`` compute. ``rate-share`` prints, per value of
+``flc.position_rate_share``, the eight position numbers the key governs (Table 6 X / Y / Z of both
+strategies, Fig. 19 X / Y), their rms log error against the paper and how many are within a factor
+2; ``yaw`` prints both strategies' Table 6 psi per random yaw torque (``disturbance.torque_noise``'s
+third element; roll and pitch keep the preset's).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from gcs_tools.identify.paper import FACTOR_2, PaperProblem, log_residual
+from gcs_tools.identify.problem import Base
+from rig_emulator.config.loader import load_config, parse_override
+from rig_emulator.sweep import run_jobs
+
+SEEDS = (0, 1, 2)
+POSITION = ("table6.flc.x_m", "table6.flc.y_m", "table6.flc.z_m", "table6.smc-flc.x_m",
+            "table6.smc-flc.y_m", "table6.smc-flc.z_m", "fig19.x_m", "fig19.y_m")
+RATE_SHARES = (0.2, 0.25, 0.3, 0.35, 0.4, 0.42, 0.45, 0.48, 0.5, 0.55, 0.65)
+YAW_TORQUES = (0.005, 0.03, 0.06)
+
+
+def numbers(overrides: list, workers: int) -> tuple[dict, list]:
+    """The metrics of every target, mean over :data:`SEEDS`, and the targets."""
+    per_seed = []
+    for seed in SEEDS:
+        problem = PaperProblem(Base(airframe="hilms", overrides=tuple(overrides)), seed=seed)
+        results = run_jobs(problem.jobs([], []), workers=workers)
+        per_seed.append(problem.metrics(results))
+    mean = {k: float(np.mean([m[k] for m in per_seed])) for k in per_seed[0]}
+    return mean, problem.targets
+
+
+def _logs(mean: dict, targets, names) -> list[float]:
+    paper = {t.metric: t.value for t in targets}
+    return [log_residual(mean[n], paper[n]) for n in names]
+
+
+def _within(logs) -> int:
+    return sum(abs(x) <= FACTOR_2 for x in logs)
+
+
+def rate_share(values, base: list, workers: int) -> None:
+    print("| rate share | Table 6 FLC X / Y / Z (m) | Table 6 SMC-FLC X / Y / Z (m) | Fig. 19 X / Y (m) "
+          "| rms log error, 8 position numbers | within x2 (of 8) | Table 6 within x2 (of 12) "
+          "| Table 6 FLC / SMC-FLC psi (deg) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for v in values:
+        mean, targets = numbers(base + [("flc.position_rate_share", v)], workers)
+        pos = _logs(mean, targets, POSITION)
+        t6 = _logs(mean, targets, [t.metric for t in targets if t.metric.startswith("table6.")])
+        f = [mean[n] for n in POSITION]
+        print(f"| {v:g} | {f[0]:.3f} / {f[1]:.3f} / {f[2]:.3f} | {f[3]:.3f} / {f[4]:.3f} / {f[5]:.3f} "
+              f"| {f[6]:.3f} / {f[7]:.3f} | {math.sqrt(np.mean(np.square(pos))):.3f} | {_within(pos)} "
+              f"| {_within(t6)} | {mean['table6.flc.psi_deg']:.3f} / {mean['table6.smc-flc.psi_deg']:.3f} |",
+              flush=True)
+
+
+def yaw(values, base: list, workers: int) -> None:
+    cfg = load_config("hilms", overrides=dict(base))
+    roll_pitch = list(cfg["disturbance.torque_noise"])[:2]
+    print("| yaw torque std (N m) | FLC psi (deg) | SMC-FLC psi (deg) | SMC-FLC / FLC |")
+    print("|---|---|---|---|")
+    for v in values:
+        mean, _ = numbers(base + [("disturbance.torque_noise", roll_pitch + [v])], workers)
+        a, b = mean["table6.flc.psi_deg"], mean["table6.smc-flc.psi_deg"]
+        print(f"| {v:g} | {a:.3f} | {b:.3f} | {b / a:.2f} |", flush=True)
+
+
+def point(base: list, workers: int) -> None:
+    mean, targets = numbers(base, workers)
+    logs = _logs(mean, targets, [t.metric for t in targets])
+    print("| number | paper | hilms | ln(hilms / paper) |")
+    print("|---|---|---|---|")
+    for t, lr in zip(targets, logs):
+        print(f"| {t.metric} | {t.value:.4f} | {mean[t.metric]:.4f} | {lr:+.3f}{' (x2 off)' if abs(lr) > FACTOR_2 else ''} |")
+    print(f"\nrms log error {math.sqrt(np.mean(np.square(logs))):.3f}; {_within(logs)} of {len(logs)} within a "
+          f"factor 2")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("study", choices=("rate-share", "yaw", "point"))
+    ap.add_argument("--values", help="comma-separated values of the scanned setting")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="override on every point (repeatable)")
+    ap.add_argument("--workers", type=int, default=2)
+    a = ap.parse_args()
+    base = [parse_override(item) for item in a.set]
+    if a.study == "point":
+        point(base, a.workers)
+        return
+    default = RATE_SHARES if a.study == "rate-share" else YAW_TORQUES
+    values = [float(v) for v in a.values.split(",")] if a.values else list(default)
+    (rate_share if a.study == "rate-share" else yaw)(values, base, a.workers)
+
+
+if __name__ == "__main__":
+    main()
