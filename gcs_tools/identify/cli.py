@@ -71,6 +71,13 @@ def add_parser(sub) -> None:
                                                          "runs test, as hinge residuals")
     g.add_argument("--paper-variant", choices=("full", "short"), default="full",
                    help="full: Table 4 over the reproduction's 13 frequencies; short: 7 of them (default %(default)s)")
+    g.add_argument("--paper-targets", metavar="PATTERNS",
+                   help="with --paper: fit only the numbers whose name matches one of these comma-separated shell "
+                        "patterns (e.g. 'table6.*.z_m,fig19.*'), or a group: position (Table 6 X/Y/Z, Fig. 19), "
+                        "attitude (Table 4, Table 6 angles); default all 18")
+    g.add_argument("--paper-seeds", type=_evals, default=1, metavar="N",
+                   help="with --paper: every number the mean over the runs of N seeds (--seed .. --seed + N - 1): "
+                        "%(default)s")
     g.add_argument("--tlog", action="append", default=[], metavar="FILE", help="a flight log to fit (repeatable)")
     g = p.add_argument_group("flight logs")
     g.add_argument("--scenario", action="append", default=[], metavar="NAME",
@@ -216,10 +223,16 @@ def build(args):
             raise UsageError("give --paper or flight logs (--tlog), not both")
         if args.claims and not args.paper:
             raise UsageError("--claims goes with --paper")
+        if (args.paper_targets is not None or args.paper_seeds != 1) and not args.paper:
+            raise UsageError("--paper-targets and --paper-seeds go with --paper")
         if args.paper:
             from gcs_tools.identify.paper import PaperProblem
 
-            problem = PaperProblem(base, seed=args.seed, claims=args.claims, variant=args.paper_variant)
+            try:
+                problem = PaperProblem(base, seed=args.seed, claims=args.claims, variant=args.paper_variant,
+                                       seeds=args.paper_seeds, targets=args.paper_targets)
+            except ValueError as exc:
+                raise UsageError(f"--paper-targets: {exc}") from None
         elif logs:
             from gcs_tools.identify.tlog_target import TlogProblem
 
@@ -247,8 +260,11 @@ def _base_text(base) -> str:
 
 def _targets_text(problem) -> str:
     if problem.kind == "paper":
-        t = (f"the paper's {len(problem.targets)} numbers (gcs_tools/identify/paper_targets.toml), seed "
-             f"{problem.seed}, variant {problem.variant}")
+        seeds = (f"seeds {problem.seed}-{problem.seed + problem.seeds - 1} (mean)" if problem.seeds > 1
+                 else f"seed {problem.seed}")
+        picked = f" selected by {problem.selection!r}" if problem.selection is not None else ""
+        t = (f"the paper's {len(problem.targets)} numbers{picked} (gcs_tools/identify/paper_targets.toml), "
+             f"{seeds}, variant {problem.variant}")
         return t + (", with its claims" if problem.with_claims else "")
     return "flight logs " + ", ".join(f"{s.log.path} (scenario {s.log.scenario}, {s.log.strategy}; "
                                       f"{', '.join(problem.channels)})" for s in problem.logs) + f", seed {problem.seed}"

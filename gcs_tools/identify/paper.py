@@ -27,6 +27,7 @@ entries are appended (0 while a claim holds).
 
 from __future__ import annotations
 
+import fnmatch
 import math
 import tomllib
 from dataclasses import dataclass
@@ -105,25 +106,42 @@ class PaperProblem(Problem):
 
     kind = "paper"
 
-    def __init__(self, base: Base, seed: int = 0, claims: bool = False, variant: str = "full"):
+    def __init__(self, base: Base, seed: int = 0, claims: bool = False, variant: str = "full", seeds: int = 1,
+                 targets: str | None = None):
+        """``seeds``: the runs of seeds ``seed`` .. ``seed + seeds - 1``, every number the mean over
+        them. ``targets``: comma-separated shell patterns of the metric names to fit (e.g.
+        ``"table6.*.x_m,fig19.*"``, or a group of :data:`TARGET_GROUPS`); default all 18."""
         if variant not in VARIANTS:
             raise ValueError(f"paper variant {variant!r}: one of {VARIANTS}")
-        self.seed, self.with_claims, self.variant = seed, claims, variant
-        self.targets, self.claims = load_data()
-        ctx = Context(seed=seed, quick=False, out_dir=None)
-        sweep = exp_sweep.jobs(ctx)
-        if variant == "short":
-            sweep = [j for j in sweep if dict(j.overrides)["guidance.omega"] in SHORT_OMEGAS]
-        helix, rect = exp_helix.jobs(ctx), exp_rectangle.jobs(ctx)
-        self.spans = {"sweep": (0, len(sweep)), "helix": (len(sweep), len(sweep) + len(helix)),
-                      "rectangle": (len(sweep) + len(helix), len(sweep) + len(helix) + len(rect))}
-        super().__init__(sweep + helix + rect, base)
+        if seeds < 1:
+            raise ValueError(f"paper seeds {seeds}: at least 1")
+        self.seed, self.with_claims, self.variant, self.seeds = seed, claims, variant, seeds
+        all_targets, self.claims = load_data()
+        self.selection = targets
+        self.targets = select_targets(all_targets, targets)
+        templates = []
+        self.spans = []
+        for sd in range(seed, seed + seeds):
+            ctx = Context(seed=sd, quick=False, out_dir=None)
+            sweep = exp_sweep.jobs(ctx)
+            if variant == "short":
+                sweep = [j for j in sweep if dict(j.overrides)["guidance.omega"] in SHORT_OMEGAS]
+            helix, rect = exp_helix.jobs(ctx), exp_rectangle.jobs(ctx)
+            a = len(templates)
+            self.spans.append({"sweep": (a, a + len(sweep)),
+                               "helix": (a + len(sweep), a + len(sweep) + len(helix)),
+                               "rectangle": (a + len(sweep) + len(helix), a + len(sweep) + len(helix) + len(rect))})
+            templates += sweep + helix + rect
+        super().__init__(templates, base)
 
     def context(self) -> dict:
-        return {"kind": self.kind, "seed": self.seed, "claims": self.with_claims, "variant": self.variant,
-                "targets": [[t.metric, t.value, t.sigma] for t in self.targets],
-                "claims_used": [[c.claim, c.metric, c.below, c.zero] for c in self.claims] if self.with_claims else [],
-                "base": self.base.describe()}
+        doc = {"kind": self.kind, "seed": self.seed, "claims": self.with_claims, "variant": self.variant,
+               "targets": [[t.metric, t.value, t.sigma] for t in self.targets],
+               "claims_used": [[c.claim, c.metric, c.below, c.zero] for c in self.claims] if self.with_claims else [],
+               "base": self.base.describe()}
+        if self.seeds > 1:  # (absent with one seed: the records of earlier fits stay valid)
+            doc["seeds"] = self.seeds
+        return doc
 
     def residual_names(self) -> list[str]:
         names = [t.metric for t in self.targets]
@@ -131,44 +149,15 @@ class PaperProblem(Problem):
             names += [f"claim {c.claim}" for c in self.claims]
         return names
 
-    def _part(self, results, name):
-        a, b = self.spans[name]
-        return results[a:b]
-
     def metrics(self, results: list) -> dict:
-        """Every simulated number the targets and claims name."""
-        m: dict = {}
-        sweep = self._part(results, "sweep")
-        per: dict = {}
-        for r in sweep:
-            e = r.mean_errors()
-            per.setdefault(r.job.strategy, []).append((dict(r.job.overrides)["guidance.omega"], e))
-        for s, rows in per.items():
-            for k in ("phi_deg", "theta_deg"):
-                m[f"table4.{s}.{k}"] = float(np.mean([e[k] for _, e in rows]))
-        m["claim.table4_flc_over_smc"] = max(m[f"table4.flc.{k}"] / m[f"table4.smc.{k}"] for k in ("phi_deg", "theta_deg"))
-        flc = per["flc"]
-        m["claim.flc_spread_over_frequency"] = max(
-            max(e[k] for _, e in flc) / min(e[k] for _, e in flc) for k in ("phi_deg", "theta_deg"))
-        smc = [0.5 * (e["phi_deg"] + e["theta_deg"]) for _, e in sorted(per["smc"], key=lambda p: p[0])]
-        m["claim.smc_interior_over_ends"] = min(smc[1:-1]) / min(smc[0], smc[-1]) if len(smc) > 2 else math.nan
-        helix = {r.job.strategy: r for r in self._part(results, "helix")}
-        me = {s: r.mean_errors() for s, r in helix.items()}
-        for s, e in me.items():
-            for c in COLUMNS:
-                m[f"table6.{s}.{c}"] = float(e[c])
-        m["claim.helix_smcflc_over_flc_xy"] = max(me["smc-flc"][c] / me["flc"][c] for c in ("x_m", "y_m"))
-        m["claim.helix_smcflc_over_flc_attitude"] = max(me["smc-flc"][c] / me["flc"][c] for c in COLUMNS[:3])
-        hf = {s: hf_rms(r.series["t"], r.series["thrust"], exp_helix.CUTOFF_HZ) for s, r in helix.items()}
-        m["claim.helix_smcflc_over_flc_thrust_hf"] = hf["smc-flc"] / hf["flc"] if hf["flc"] > 0 else math.nan
-        (rect,) = self._part(results, "rectangle")
-        s = rect.series
-        reached = rect.reached_t
-        end = float(np.nanmax(reached)) if np.all(np.isfinite(reached)) else float(s["t"][-1])
-        for i, k in enumerate(("x_m", "y_m")):
-            m[f"fig19.{k}"] = window_mean_abs(s["t"], s["pos"][:, i], s["pos_des"][:, i], s["t"][0], end)
-        m["claim.rectangle_unreached"] = float(np.sum(~np.isfinite(reached)))
-        return {k: float(v) for k, v in m.items()}
+        """Every simulated number the targets and claims name, the mean over the seeds."""
+        per_seed = []
+        for spans in self.spans:
+            part = {name: results[a:b] for name, (a, b) in spans.items()}
+            per_seed.append(_metrics_one(part["sweep"], part["helix"], part["rectangle"]))
+        if len(per_seed) == 1:
+            return per_seed[0]
+        return {k: float(np.mean([m[k] for m in per_seed])) for k in per_seed[0]}
 
     def residuals(self, metrics: dict) -> np.ndarray:
         r = [log_residual(metrics.get(t.metric, math.nan), t.value) / t.sigma for t in self.targets]
@@ -195,6 +184,68 @@ class PaperProblem(Problem):
                 "within_factor_2": int(np.sum(np.abs(logs) <= FACTOR_2)),
                 "within_20_pct": int(sum(abs(r["fit"] / r["paper"] - 1.0) <= WITHIN_20_PCT
                                          for r in rows if math.isfinite(r["fit"])))}
+
+
+def _metrics_one(sweep: list, helix_runs: list, rect_runs: list) -> dict:
+    """The metrics of one seed's runs (sweep, helix and rectangle parts)."""
+    m: dict = {}
+    per: dict = {}
+    for r in sweep:
+        e = r.mean_errors()
+        per.setdefault(r.job.strategy, []).append((dict(r.job.overrides)["guidance.omega"], e))
+    for s, rows in per.items():
+        for k in ("phi_deg", "theta_deg"):
+            m[f"table4.{s}.{k}"] = float(np.mean([e[k] for _, e in rows]))
+    m["claim.table4_flc_over_smc"] = max(m[f"table4.flc.{k}"] / m[f"table4.smc.{k}"] for k in ("phi_deg", "theta_deg"))
+    flc = per["flc"]
+    m["claim.flc_spread_over_frequency"] = max(
+        max(e[k] for _, e in flc) / min(e[k] for _, e in flc) for k in ("phi_deg", "theta_deg"))
+    smc = [0.5 * (e["phi_deg"] + e["theta_deg"]) for _, e in sorted(per["smc"], key=lambda p: p[0])]
+    m["claim.smc_interior_over_ends"] = min(smc[1:-1]) / min(smc[0], smc[-1]) if len(smc) > 2 else math.nan
+    helix = {r.job.strategy: r for r in helix_runs}
+    me = {s: r.mean_errors() for s, r in helix.items()}
+    for s, e in me.items():
+        for c in COLUMNS:
+            m[f"table6.{s}.{c}"] = float(e[c])
+    m["claim.helix_smcflc_over_flc_xy"] = max(me["smc-flc"][c] / me["flc"][c] for c in ("x_m", "y_m"))
+    m["claim.helix_smcflc_over_flc_attitude"] = max(me["smc-flc"][c] / me["flc"][c] for c in COLUMNS[:3])
+    hf = {s: hf_rms(r.series["t"], r.series["thrust"], exp_helix.CUTOFF_HZ) for s, r in helix.items()}
+    m["claim.helix_smcflc_over_flc_thrust_hf"] = hf["smc-flc"] / hf["flc"] if hf["flc"] > 0 else math.nan
+    (rect,) = rect_runs
+    s = rect.series
+    reached = rect.reached_t
+    end = float(np.nanmax(reached)) if np.all(np.isfinite(reached)) else float(s["t"][-1])
+    for i, k in enumerate(("x_m", "y_m")):
+        m[f"fig19.{k}"] = window_mean_abs(s["t"], s["pos"][:, i], s["pos_des"][:, i], s["t"][0], end)
+    m["claim.rectangle_unreached"] = float(np.sum(~np.isfinite(reached)))
+    return {k: float(v) for k, v in m.items()}
+
+
+#: named groups of ``--paper-targets``
+TARGET_GROUPS = {
+    "position": "table6.*.x_m,table6.*.y_m,table6.*.z_m,fig19.*",
+    "attitude": "table4.*,table6.*_deg",
+}
+
+
+def select_targets(targets: list[Target], selection: str | None) -> list[Target]:
+    """The targets whose metric matches one of the comma-separated shell patterns of
+    ``selection`` (a name of :data:`TARGET_GROUPS` stands for its patterns); all for None.
+    ValueError naming the pattern when one matches nothing."""
+    if selection is None:
+        return list(targets)
+    patterns = []
+    for item in (p.strip() for p in selection.split(",")):
+        if not item:
+            continue
+        patterns += TARGET_GROUPS[item].split(",") if item in TARGET_GROUPS else [item]
+    if not patterns:
+        raise ValueError("paper targets: no pattern given")
+    for pat in patterns:
+        if not any(fnmatch.fnmatchcase(t.metric, pat) for t in targets):
+            raise ValueError(f"paper targets: {pat!r} matches none of "
+                             f"{', '.join(t.metric for t in targets)}")
+    return [t for t in targets if any(fnmatch.fnmatchcase(t.metric, p) for p in patterns)]
 
 
 def log_residual(simulated: float, paper: float) -> float:

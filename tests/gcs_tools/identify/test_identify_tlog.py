@@ -99,9 +99,14 @@ def test_bad_input_exits_2_naming_it(hidden_log, tmp_path, capsys):
         (["--params", "vibration.blades=1:4"] + log, "integer"),
         (["--params", "control.actuation_delay=0:0.01", "--step", "control.actuation_delay=0.02"] + log, "step"),
         (log, "no parameter"),
+        (["--params", "airframe.ixx=0.04:0.1", "--paper", "--paper-targets", "table7.*"], "table7.*"),
+        (["--params", "airframe.ixx=0.04:0.1", "--paper-seeds", "3"] + log, "go with --paper"),
     ]
     for extra, word in cases:
         assert main(base + extra) == 2, extra
         err = capsys.readouterr().err
         assert word in err, (extra, err)
+    with pytest.raises(SystemExit) as exc:  # argparse's own check
+        main(base + ["--params", "airframe.ixx=0.04:0.1", "--paper", "--paper-seeds", "0"])
+    assert exc.value.code == 2 and "--paper-seeds" in capsys.readouterr().err
     assert not (tmp_path / "x.toml").exists()

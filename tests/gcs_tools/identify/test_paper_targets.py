@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from gcs_tools.identify.paper import FACTOR_2, PaperProblem, log_residual
+from gcs_tools.identify.paper import FACTOR_2, PaperProblem, load_data, log_residual, select_targets
 from gcs_tools.identify.params import parse_params_arg
 from gcs_tools.identify.problem import Base
 from rig_emulator.sweep import run_jobs
@@ -44,3 +44,37 @@ def test_every_number_is_computed_from_the_experiments(evaluated):
 def test_log_residual_of_a_missing_number_is_large():
     assert log_residual(math.nan, 1.0) == log_residual(0.0, 1.0) == 4.0
     assert log_residual(2.0, 1.0) == pytest.approx(math.log(2.0))
+
+
+def test_a_selection_of_the_numbers_is_fitted_alone():
+    targets, _ = load_data()
+    position = [t.metric for t in select_targets(targets, "position")]
+    assert position == ["table6.flc.x_m", "table6.flc.y_m", "table6.flc.z_m", "table6.smc-flc.x_m",
+                        "table6.smc-flc.y_m", "table6.smc-flc.z_m", "fig19.x_m", "fig19.y_m"]
+    assert [t.metric for t in select_targets(targets, "fig19.*, table4.smc.*")] == [
+        "table4.smc.phi_deg", "table4.smc.theta_deg", "fig19.x_m", "fig19.y_m"]  # in the file's order
+    assert len(select_targets(targets, None)) == len(select_targets(targets, "position,attitude")) == 18
+    with pytest.raises(ValueError, match="table6.flc.q_m"):
+        select_targets(targets, "position,table6.flc.q_m")
+    problem = PaperProblem(Base(), targets="table6.*.z_m")
+    assert problem.residual_names() == ["table6.flc.z_m", "table6.smc-flc.z_m"]
+    assert problem.residuals({"table6.flc.z_m": 0.2279, "table6.smc-flc.z_m": 2 * 0.2263}) == pytest.approx(
+        [0.0, math.log(2.0)])
+
+
+def test_several_seeds_give_the_mean_of_their_numbers():
+    both = PaperProblem(Base(), seed=0, seeds=2, variant="short", targets="position")
+    jobs = both.jobs([], [])
+    n = len(jobs) // 2
+    assert [j.seed for j in jobs] == [0] * n + [1] * n
+    per_seed = []
+    for seed in (0, 1):
+        one = PaperProblem(Base(), seed=seed, variant="short")
+        assert one.jobs([], []) == jobs[seed * n:(seed + 1) * n]  # the same runs
+        per_seed.append(one.metrics(run_jobs(one.jobs([], []), workers=1)))
+    assert per_seed[0]["table6.flc.z_m"] != per_seed[1]["table6.flc.z_m"]  # another seed, other noise
+    merged = both.metrics(run_jobs(jobs, workers=1))
+    for k in per_seed[0]:
+        assert merged[k] == pytest.approx(0.5 * (per_seed[0][k] + per_seed[1][k])), k
+    assert len(both.residuals(merged)) == 8
+    assert both.context()["seeds"] == 2 and "seeds" not in PaperProblem(Base()).context()
