@@ -21,8 +21,9 @@ the split changes where a callee is compiled, never what is compiled (the loop's
 is the same but for the callees' symbol names; headless logs stay bit-identical).
 
 There is no helper when the cache holds the loop (a warm start), when a compiled function does
-not cache, inside a sweep's pool worker that shares the machine with its siblings
-(:mod:`rig_emulator.sweep`), or with ``HILMS_COMPILE_HELPER=0`` in the environment.
+not cache, when no core is idle (a helper sharing this process's core only slows it down), inside
+a sweep's pool worker that shares the machine with its siblings (:mod:`rig_emulator.sweep`), or
+with ``HILMS_COMPILE_HELPER=0`` in the environment (``1``: whether a core is idle or not).
 """
 
 from __future__ import annotations
@@ -53,7 +54,37 @@ _ROOT = str(Path(__file__).resolve().parent.parent)  # the directory the helper 
 
 
 def enabled() -> bool:
-    return os.environ.get(ENV_SWITCH, "1") != "0"
+    """``HILMS_COMPILE_HELPER``: ``0`` never starts a helper, ``1`` always (when there is work for it),
+    anything else (the default) when a core is idle (:func:`idle_cores`)."""
+    mode = os.environ.get(ENV_SWITCH, "")
+    if mode in ("0", "1"):
+        return mode == "1"
+    return idle_cores() >= MIN_IDLE_CORES
+
+
+#: a helper needs a core of its own: on a busy machine it only takes time from this process (and its
+#: start, about 1.5 s of imports, and the callees both compile are lost)
+MIN_IDLE_CORES = 0.6
+_SAMPLE_S = 0.05
+
+
+def idle_cores(sample_s: float = _SAMPLE_S) -> float:
+    """How many of this process's cores are idle now: the idle share of all CPU time over ``sample_s``
+    (/proc/stat) times the cores, or the cores minus the 1-minute load average elsewhere."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    try:
+        def sample():
+            with open("/proc/stat") as fh:
+                v = [int(x) for x in fh.readline().split()[1:]]
+            return v[3] + v[4], sum(v[:8])  # idle + iowait, all but guest time (counted in user)
+
+        idle0, total0 = sample()
+        time.sleep(sample_s)
+        idle1, total1 = sample()
+        machine = os.cpu_count() or cores
+        return min(cores, (idle1 - idle0) / max(1, total1 - total0) * machine)
+    except (OSError, ValueError, IndexError):
+        return cores - os.getloadavg()[0]
 
 
 def _key(sig) -> tuple:
@@ -192,14 +223,14 @@ def claim(path: str) -> bool:
 def start(dispatcher, args: tuple, sig) -> Helper | None:
     """A helper for compiling ``dispatcher`` for ``args`` (of types ``sig``), or None when there is
     nothing to share (see the module docstring)."""
-    if not enabled():
+    if os.environ.get(ENV_SWITCH) == "0":
         return None
     jobs_function = _jobs_function(dispatcher)
     if jobs_function is None or not caches(dispatcher) or is_cached(dispatcher, sig):
         return None
     jobs = [(d, s) for d, s in jobs_function(args)
             if caches(d) and _key(s) not in d.overloads and not is_cached(d, s)]
-    return Helper(jobs) if jobs else None
+    return Helper(jobs) if jobs and enabled() else None
 
 
 @contextmanager
