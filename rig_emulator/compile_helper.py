@@ -7,8 +7,8 @@ the loop it first looks for the callee's signature in that cache: a callee compi
 another process is loaded (and its code linked into the loop's module, as for one compiled
 here), not compiled again. So when :func:`split_compile` finds the step loop missing from
 the cache it starts a **helper process** that compiles independent subtrees of the loop's
-call tree (:func:`loop_jobs`: the log row, the supervisor, the control update, guidance, the
-load-cell filter, the attitude estimation) into the cache while this process types the loop
+call tree (:func:`loop_jobs`: the rigid body's callees, the log row, the supervisor, the control
+update, guidance, the load-cell filter, the attitude estimation) into the cache while this process types the loop
 and compiles the rest.
 
 The two share the jobs through claim files (``os.open(..., O_CREAT | O_EXCL)`` in a private
@@ -118,13 +118,24 @@ def loop_jobs(args: tuple) -> list:
     from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
     from rig_emulator.estimation.load_cell_filter import load_cell_filter_step
     from rig_emulator.guidance.runner import guidance_update
+    from rig_emulator.physics.disturbances import extra_mass_effects, shock_torque
+    from rig_emulator.physics.integrator import apply_ground
+    from rig_emulator.physics.rotation import quat_derivative, quat_normalize, quat_to_rot
     from rig_emulator.simulation import loop
 
     a = dict(zip(inspect.signature(loop.run_steps.py_func).parameters, args))
     x, sp, ss, ref, cout = a["x"], a["sp"], a["ss"], a["ref"], a["cout"]
     f = 0.0  # a float64 (times, angles, rates)
     pos = x[0:3]  # the loop's pos and vel: x[0:3] or ss.onboard[0:3], both C-contiguous slices
-    calls = []
+    R = a["R"]
+    calls = [  # the rigid body's callees (rk4_step and state_derivative are inlined into the loop)
+        (apply_ground, (x, a["pp"])),
+        (quat_normalize, (x[6:10],)),
+        (quat_derivative, (f, f, f, f, f, f, f, x[6:10])),
+        (shock_torque, (f, a["shocks"])),
+        (extra_mass_effects, (a["extra"], R, f)),
+        (quat_to_rot, (f, f, f, f, R)),
+    ]
     if a["log"].shape[0] > 0:
         calls.append((loop._log_row, (a["log"][0], f, x, a["pp"], sp, ss, ref, cout, a["gstate"], a["v_cmd"], a["us"])))
     calls += [

@@ -74,8 +74,10 @@ def test_no_helper_for_a_cached_loop_or_when_switched_off(monkeypatch):
     assert compile_helper.start(run_steps, args, sig) is None
     monkeypatch.setenv(compile_helper.ENV_SWITCH, "0")
     assert not compile_helper.enabled()
-    monkeypatch.delenv(compile_helper.ENV_SWITCH)
+    monkeypatch.setenv(compile_helper.ENV_SWITCH, "1")
     assert compile_helper.enabled()
+    monkeypatch.delenv(compile_helper.ENV_SWITCH)
+    assert 0.0 <= compile_helper.idle_cores() <= (os.cpu_count() or 1)  # automatic: a helper when a core is idle
     uncached = _jit.jit(cache=False)(lambda v: v + 1.0)
     assert not compile_helper.caches(uncached)
     assert compile_helper.start(uncached, (1.0,), (numba.float64,)) is None
