@@ -63,7 +63,7 @@ def enabled() -> bool:
 
 
 #: a helper needs a core of its own: on a busy machine it only takes time from this process (and its
-#: start, about 1.5 s of imports, and the callees both compile are lost)
+#: start, about 0.6 s CPU of imports, and the callees both compile are lost)
 MIN_IDLE_CORES = 0.6
 _SAMPLE_S = 0.05
 
