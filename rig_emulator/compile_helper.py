@@ -55,22 +55,23 @@ _ROOT = str(Path(__file__).resolve().parent.parent)  # the directory the helper 
 
 def enabled() -> bool:
     """``HILMS_COMPILE_HELPER``: ``0`` never starts a helper, ``1`` always (when there is work for it),
-    anything else (the default) when a core is idle (:func:`idle_cores`)."""
+    anything else (the default) when a core besides this process's own is idle (:func:`idle_cores`)."""
     mode = os.environ.get(ENV_SWITCH, "")
     if mode in ("0", "1"):
         return mode == "1"
-    return idle_cores() >= MIN_IDLE_CORES
+    return idle_cores() - 1.0 >= MIN_SPARE_CORES  # one idle core is this process's own (it sleeps in the sample)
 
 
 #: a helper needs a core of its own: on a busy machine it only takes time from this process (and its
 #: start, about 0.6 s CPU of imports, and the callees both compile are lost)
-MIN_IDLE_CORES = 0.6
-_SAMPLE_S = 0.05
+MIN_SPARE_CORES = 0.6
+_SAMPLE_S = 0.1  # /proc/stat counts in 10 ms ticks
 
 
 def idle_cores(sample_s: float = _SAMPLE_S) -> float:
-    """How many of this process's cores are idle now: the idle share of all CPU time over ``sample_s``
-    (/proc/stat) times the cores, or the cores minus the 1-minute load average elsewhere."""
+    """How many of this process's cores are idle now, its own included (it sleeps while it samples): the
+    idle share of all CPU time over ``sample_s`` (/proc/stat) times the cores, or the cores minus the
+    1-minute load average where there is no /proc/stat."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     try:
         def sample():
