@@ -184,9 +184,13 @@ class Helper:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (_ROOT, env.get("PYTHONPATH")) if p)
         argv = argv or [sys.executable, "-m", "rig_emulator.compile_helper"]
-        with open(os.path.join(self.dir, "helper.log"), "wb") as log:
-            self.proc = subprocess.Popen([*argv, self.dir, str(os.getpid())], stdin=subprocess.DEVNULL,
-                                         stdout=log, stderr=subprocess.STDOUT, env=env, close_fds=True)
+        try:
+            with open(os.path.join(self.dir, "helper.log"), "wb") as log:
+                self.proc = subprocess.Popen([*argv, self.dir, str(os.getpid())], stdin=subprocess.DEVNULL,
+                                             stdout=log, stderr=subprocess.STDOUT, env=env, close_fds=True)
+        except BaseException:
+            shutil.rmtree(self.dir, ignore_errors=True)
+            raise
 
     def _path(self, i: int, what: str) -> str:
         return os.path.join(self.dir, f"{i}.{what}")
