@@ -63,9 +63,10 @@ def enabled() -> bool:
 
 
 #: a helper needs a core of its own: on a busy machine it only takes time from this process (and its
-#: start, about 0.6 s CPU of imports, and the callees both compile are lost)
-MIN_SPARE_CORES = 0.6
-_SAMPLE_S = 0.1  # /proc/stat counts in 10 ms ticks
+#: start, about 0.6 s CPU of imports, and the callees both compile are lost: +2-3 s with one other busy
+#: process on 2 cores, against -7 to -8 s on a quiet machine, so only a clearly busy machine goes without)
+MIN_SPARE_CORES = 0.3
+_SAMPLE_S = 0.2  # /proc/stat counts in 10 ms ticks; long enough not to follow a blip
 
 
 def idle_cores(sample_s: float = _SAMPLE_S) -> float:
