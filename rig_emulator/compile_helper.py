@@ -94,19 +94,15 @@ def _key(sig) -> tuple:
     return tuple(args)
 
 
-def is_cached(dispatcher, sig) -> bool:
-    """Whether numba's on-disk cache holds ``dispatcher`` compiled for ``sig`` (False when it does not
-    cache, or when numba's cache internals are not what this expects)."""
+def is_cached(dispatcher, sig) -> bool | None:
+    """Whether numba's on-disk cache holds ``dispatcher`` compiled for ``sig``; None when it cannot tell
+    (no cache, or numba's cache internals are not what this expects)."""
     try:
         cache = dispatcher._cache
         key = cache._index_key(_key(sig), dispatcher.targetctx.codegen())
         return key in cache._cache_file._load_index()
-    except Exception:  # noqa: BLE001 - a NullCache (no caching) or moved internals: treat as not cached
-        return False
-
-
-def caches(dispatcher) -> bool:
-    return hasattr(getattr(dispatcher, "_cache", None), "_cache_file")
+    except Exception:  # noqa: BLE001 - a NullCache (no caching) or moved internals
+        return None
 
 
 def loop_jobs(args: tuple) -> list:
@@ -243,10 +239,10 @@ def start(dispatcher, args: tuple, sig) -> Helper | None:
     if os.environ.get(ENV_SWITCH) == "0":
         return None
     jobs_function = _jobs_function(dispatcher)
-    if jobs_function is None or not caches(dispatcher) or is_cached(dispatcher, sig):
-        return None
+    if jobs_function is None or is_cached(dispatcher, sig) is not False:
+        return None  # warm, not cached at all, or numba's cache internals moved: no helper
     jobs = [(d, s) for d, s in jobs_function(args)
-            if caches(d) and _key(s) not in d.overloads and not is_cached(d, s)]
+            if _key(s) not in d.overloads and is_cached(d, s) is False]
     return Helper(jobs) if jobs and enabled() else None
 
 
