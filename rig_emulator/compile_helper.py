@@ -20,7 +20,8 @@ produces nothing the cache can use (another signature), numba simply compiles th
 the split changes where a callee is compiled, never what is compiled (the loop's machine code
 is the same but for the callees' symbol names; headless logs stay bit-identical).
 
-There is no helper when the cache holds the loop (a warm start), when a compiled function does
+There is no helper when the cache holds the loop (a warm start) or cannot be read as expected (a
+numba upgrade that moved its internals), when a compiled function does
 not cache, when no core is idle (a helper sharing this process's core only slows it down), inside
 a sweep's pool worker that shares the machine with its siblings (:mod:`rig_emulator.sweep`), or
 with ``HILMS_COMPILE_HELPER=0`` in the environment (``1``: whether a core is idle or not).
