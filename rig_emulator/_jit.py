@@ -120,6 +120,9 @@ def _in_large_frame(fn, args, kwargs):
 _in_large_frame.__code__ = _in_large_frame.__code__.replace(
     co_stacksize=_in_large_frame.__code__.co_stacksize + (1 << 17))
 _compiling = threading.local()
+#: called with (dispatcher, signature) before every compile of a dispatcher made by :func:`jit`
+#: while a split compile runs (rig_emulator/compile_helper.py); None otherwise
+_compile_hook = None
 
 
 def _outermost(fn, args, kwargs):
@@ -137,6 +140,9 @@ class _LargeFrame:
     frame (see :func:`_in_large_frame`); the compiled code is the same."""
 
     def compile(self, sig):
+        hook = _compile_hook
+        if hook is not None:
+            hook(self, sig)
         return _outermost(super().compile, (sig,), {})
 
     def _compile_for_args(self, *args, **kws):

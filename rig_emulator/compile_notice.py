@@ -16,8 +16,9 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-#: cold compile of the step loop on a quiet 2-core machine (benchmarks/compile_profile.py)
-QUIET_COMPILE_S = 40
+#: cold compile of the step loop on a quiet 2-core machine, a helper process on the second core
+#: (rig_emulator/compile_helper.py; measured 21-23 s, benchmarks/README.md "Cold compile")
+QUIET_COMPILE_S = 25
 
 
 def step_loop_cached() -> bool:

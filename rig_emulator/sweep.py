@@ -234,14 +234,20 @@ def _mp_context():
     return multiprocessing.get_context("spawn")
 
 
-def _warm_worker() -> None:
+def _warm_worker(compile_helper: bool = True) -> None:
     """A pool worker's start: import the simulation and load (or compile) its step loop by
     running one physics step, so the first job does not pay it. A worker ignores SIGINT: Ctrl-C
     in a terminal reaches the whole process group, and it is the caller's to act on (it stops
-    the sweep; the workers finish the batches they hold and stay warm)."""
+    the sweep; the workers finish the batches they hold and stay warm). ``compile_helper``: a cold
+    compile may start a helper process (rig_emulator/compile_helper.py); not when the pool's
+    workers already take every core."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if not compile_helper:
+        from rig_emulator import compile_helper as helper
+
+        os.environ[helper.ENV_SWITCH] = "0"
     from rig_emulator.config.loader import load_config
     from rig_emulator.simulation.run import Simulation
 
@@ -271,7 +277,9 @@ class SweepPool:
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise ValueError(f"workers {workers!r}: must be an integer >= 1")
         self.workers = n
-        self._executor = ProcessPoolExecutor(max_workers=n, mp_context=_mp_context(), initializer=_warm_worker)
+        # workers compiling cold at once already keep the cores busy: no compile helpers then
+        self._executor = ProcessPoolExecutor(max_workers=n, mp_context=_mp_context(), initializer=_warm_worker,
+                                             initargs=(n < (os.cpu_count() or 1),))
         self._lock = threading.Lock()
         self._broken = False
         # start every worker now (the executor would otherwise start them as work arrives)

@@ -67,7 +67,10 @@ def entry_point(dispatcher, args: tuple):
             return hit
     sig = signature(dispatcher, args)
     if sig not in dispatcher.overloads:
-        dispatcher.compile(sig)
+        from rig_emulator.compile_helper import split_compile
+
+        with split_compile(dispatcher, args, sig):  # cold: a second process compiles part of the loop
+            dispatcher.compile(sig)
     entry = dispatcher.overloads[sig].entry_point
     if key is not None:
         _ENTRIES[(id(dispatcher), key)] = entry
