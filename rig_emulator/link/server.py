@@ -261,6 +261,7 @@ class RigServer:
     def _command(self, cmd: Command, channel: Channel) -> None:
         self.counters.commands += 1
         result, follow = execute(cmd, self, channel)
+        self._snap = None  # a command may have changed the rig (armed, mode, ...): the next reader sees it
         if result is None:  # a duplicated or overtaken copy of a command already answered
             return
         channel.send(M.MAVLink_command_ack_message(
