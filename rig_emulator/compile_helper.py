@@ -152,15 +152,11 @@ def loop_jobs(args: tuple) -> list:
     return [(d, tuple(d.typeof_pyval(v) for v in values)) for d, values in calls]
 
 
-_JOBS_FOR = {}  # dispatcher -> its jobs function; filled lazily (importing the loop here would be a cycle)
-
-
 def _jobs_function(dispatcher):
-    if not _JOBS_FOR:
-        from rig_emulator.simulation.loop import run_steps
+    """The jobs function of ``dispatcher`` (only the step loop has one), else None."""
+    from rig_emulator.simulation.loop import run_steps  # here: importing the loop at the top would be a cycle
 
-        _JOBS_FOR[run_steps] = loop_jobs
-    return _JOBS_FOR.get(dispatcher)
+    return loop_jobs if dispatcher is run_steps else None
 
 
 class Helper:

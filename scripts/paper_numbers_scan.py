@@ -21,27 +21,20 @@ import math
 
 import numpy as np
 
-from gcs_tools.identify.paper import FACTOR_2, PaperProblem, log_residual
+from gcs_tools.identify.paper import FACTOR_2, PaperProblem, log_residual, select_targets
 from gcs_tools.identify.problem import Base
 from rig_emulator.config.loader import load_config, parse_override
 from rig_emulator.sweep import run_jobs
 
-SEEDS = (0, 1, 2)
-POSITION = ("table6.flc.x_m", "table6.flc.y_m", "table6.flc.z_m", "table6.smc-flc.x_m",
-            "table6.smc-flc.y_m", "table6.smc-flc.z_m", "fig19.x_m", "fig19.y_m")
+SEEDS = (0, 1, 2)  # consecutive: PaperProblem's seeds .. seeds + n - 1
 RATE_SHARES = (0.2, 0.25, 0.3, 0.35, 0.4, 0.42, 0.45, 0.48, 0.5, 0.55, 0.65)
 YAW_TORQUES = (0.005, 0.03, 0.06)
 
 
 def numbers(overrides: list, workers: int) -> tuple[dict, list]:
     """The metrics of every target, mean over :data:`SEEDS`, and the targets."""
-    per_seed = []
-    for seed in SEEDS:
-        problem = PaperProblem(Base(airframe="hilms", overrides=tuple(overrides)), seed=seed)
-        results = run_jobs(problem.jobs([], []), workers=workers)
-        per_seed.append(problem.metrics(results))
-    mean = {k: float(np.mean([m[k] for m in per_seed])) for k in per_seed[0]}
-    return mean, problem.targets
+    problem = PaperProblem(Base(airframe="hilms", overrides=tuple(overrides)), seed=SEEDS[0], seeds=len(SEEDS))
+    return problem.metrics(run_jobs(problem.jobs([], []), workers=workers)), problem.targets
 
 
 def _logs(mean: dict, targets, names) -> list[float]:
@@ -60,9 +53,10 @@ def rate_share(values, base: list, workers: int) -> None:
     print("|---|---|---|---|---|---|---|---|")
     for v in values:
         mean, targets = numbers(base + [("flc.position_rate_share", v)], workers)
-        pos = _logs(mean, targets, POSITION)
+        position = [t.metric for t in select_targets(targets, "position")]  # Table 6 X / Y / Z, Fig. 19
+        pos = _logs(mean, targets, position)
         t6 = _logs(mean, targets, [t.metric for t in targets if t.metric.startswith("table6.")])
-        f = [mean[n] for n in POSITION]
+        f = [mean[n] for n in position]
         print(f"| {v:g} | {f[0]:.3f} / {f[1]:.3f} / {f[2]:.3f} | {f[3]:.3f} / {f[4]:.3f} / {f[5]:.3f} "
               f"| {f[6]:.3f} / {f[7]:.3f} | {math.sqrt(np.mean(np.square(pos))):.3f} | {_within(pos)} "
               f"| {_within(t6)} | {mean['table6.flc.psi_deg']:.3f} / {mean['table6.smc-flc.psi_deg']:.3f} |",

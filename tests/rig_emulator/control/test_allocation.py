@@ -64,9 +64,10 @@ def test_collective_gives_way_to_roll():
     assert abs(_a6(out)[1] - 0.5) < 1e-12
 
 
-def test_yaw_is_last():
+@pytest.mark.parametrize("priority", [PRIORITY_ATTITUDE, PRIORITY_THRUST], ids=["attitude", "thrust"])
+def test_yaw_is_last(priority):
     out = np.zeros(4)
-    flags = allocate(4 * 5.5, 0.0, 0.0, 1.0, L, C, FMAX, PRIORITY_ATTITUDE, out)
+    flags = allocate(4 * 5.5, 0.0, 0.0, 1.0, L, C, FMAX, priority, out)
     assert flags & SATURATED_YAW
     u1, u2, u3, u4 = _a6(out)
     assert abs(u1 - 22.0) < 1e-9 and abs(u2) < 1e-12 and abs(u3) < 1e-12 and 0 < u4 < 1.0
@@ -157,11 +158,3 @@ def test_thrust_first_scale_sign_and_size():
     assert abs(thrust_first_scale(5.0, -4.0, 4.0, FMAX) - 0.5) < 1e-12     # 2 N of room above over 4 N
     assert abs(thrust_first_scale(1.0, -4.0, 4.0, FMAX) - 0.25) < 1e-12    # 1 N of room below over 4 N
     assert thrust_first_scale(0.0, -1.0, 1.0, FMAX) == 0.0                 # no thrust: no differential
-
-
-def test_yaw_still_last_with_thrust_first():
-    out = np.zeros(4)
-    flags = allocate(4 * 5.5, 0.0, 0.0, 1.0, L, C, FMAX, PRIORITY_THRUST, out)
-    assert flags & SATURATED_YAW
-    u1, u2, u3, u4 = _a6(out)
-    assert abs(u1 - 22.0) < 1e-9 and abs(u2) < 1e-12 and abs(u3) < 1e-12 and 0 < u4 < 1.0
