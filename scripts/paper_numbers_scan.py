@@ -1,8 +1,10 @@
 """The paper's 18 numbers (Table 4, Table 6, Fig. 19) on ``hilms`` over a scan of one setting, mean
-over seeds 0-2 (docs/REPRODUCTION.md, "The position FLC's rate share" and "Table 6's yaw").
+over seeds 0-2 (docs/REPRODUCTION.md, "The position FLC's rate share", "Table 6's yaw" and "The
+actuation delay").
 
     python scripts/paper_numbers_scan.py rate-share [--values 0.2,0.25,...] [--workers N]
     python scripts/paper_numbers_scan.py yaw [--values 0.005,0.03,0.06] [--set KEY=VALUE ...]
+    python scripts/paper_numbers_scan.py delay [--values 0.006,0.01,...] [--set KEY=VALUE ...]
     python scripts/paper_numbers_scan.py point [--set KEY=VALUE ...]     # one setting, all 18 numbers
 
 Every point runs the job list of ``rig-gcs identify --paper`` (the reproduction's own sweep, helix
@@ -11,7 +13,10 @@ ones a fit and ``rig-gcs reproduce`` compute. ``rate-share`` prints, per value o
 ``flc.position_rate_share``, the eight position numbers the key governs (Table 6 X / Y / Z of both
 strategies, Fig. 19 X / Y), their rms log error against the paper and how many are within a factor
 2; ``yaw`` prints both strategies' Table 6 psi per random yaw torque (``disturbance.torque_noise``'s
-third element; roll and pitch keep the preset's).
+third element; roll and pitch keep the preset's); ``delay`` prints, per sensing-to-actuation delay
+(``control.actuation_delay``), the attitude numbers, each attitude law's Table 4 / Table 6 ratio,
+the 18 numbers' summary and how many of the 12 claims ``rig-gcs identify --claims`` fits hold
+(its runs add the shock and extra-mass experiments: 39 a seed).
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ import math
 
 import numpy as np
 
-from gcs_tools.identify.paper import FACTOR_2, PaperProblem, log_residual, select_targets
+from gcs_tools.identify.paper import FACTOR_2, PaperProblem, load_data, log_residual, select_targets
 from gcs_tools.identify.problem import Base
 from rig_emulator.config.loader import load_config, parse_override
 from rig_emulator.sweep import run_jobs
@@ -29,12 +34,21 @@ from rig_emulator.sweep import run_jobs
 SEEDS = (0, 1, 2)  # consecutive: PaperProblem's seeds .. seeds + n - 1
 RATE_SHARES = (0.2, 0.25, 0.3, 0.35, 0.4, 0.42, 0.45, 0.48, 0.5, 0.55, 0.65)
 YAW_TORQUES = (0.005, 0.03, 0.06)
+DELAYS = (0.006, 0.008, 0.010, 0.012, 0.013, 0.014, 0.016)
 
 
-def numbers(overrides: list, workers: int) -> tuple[dict, list]:
-    """The metrics of every target, mean over :data:`SEEDS`, and the targets."""
-    problem = PaperProblem(Base(airframe="hilms", overrides=tuple(overrides)), seed=SEEDS[0], seeds=len(SEEDS))
+def numbers(overrides: list, workers: int, claims: bool = False) -> tuple[dict, list]:
+    """The metrics of every target (and with ``claims`` of the 12 claims ``rig-gcs identify
+    --claims`` fits), mean over :data:`SEEDS`, and the targets."""
+    problem = PaperProblem(Base(airframe="hilms", overrides=tuple(overrides)), seed=SEEDS[0], seeds=len(SEEDS),
+                           claims=claims)
     return problem.metrics(run_jobs(problem.jobs([], []), workers=workers)), problem.targets
+
+
+def _claims_held(mean: dict) -> tuple[int, int]:
+    """How many of the claims ``rig-gcs identify --claims`` fits hold on these metrics, of how many."""
+    _, claims = load_data()
+    return sum(c.residual(mean[c.metric]) == 0.0 for c in claims), len(claims)
 
 
 def _logs(mean: dict, targets, names) -> list[float]:
@@ -74,6 +88,38 @@ def yaw(values, base: list, workers: int) -> None:
         print(f"| {v:g} | {a:.3f} | {b:.3f} | {b / a:.2f} |", flush=True)
 
 
+def delay(values, base: list, workers: int) -> None:
+    """Per sensing-to-actuation delay: the paper's attitude numbers, the ratio of each attitude
+    law's error on the harmonic sweep (Table 4) to its error on the helix (Table 6; the SMC's
+    inner loop there is SMC-FLC's), all 18 numbers and the claims."""
+    print("| delay (ms) | Table 4 SMC phi / theta | Table 4 FLC phi / theta | Table 6 FLC phi / theta / psi "
+          "| Table 6 SMC-FLC phi / theta / psi | SMC Table 4 / Table 6 | FLC Table 4 / Table 6 "
+          "| within x2 (of 18) | rms log error | Table 6 within x2 (of 12) | claims held (of the fitted) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for v in values:
+        mean, targets = numbers(base + [("control.actuation_delay", v)], workers, claims=True)
+        logs = _logs(mean, targets, [t.metric for t in targets])
+        t6 = _logs(mean, targets, [t.metric for t in targets if t.metric.startswith("table6.")])
+        g = {k: mean[k] for k in mean}
+
+        def tilt(prefix):
+            return 0.5 * (g[f"{prefix}.phi_deg"] + g[f"{prefix}.theta_deg"])
+        held, n = _claims_held(mean)
+        print(f"| {v * 1e3:g} | {g['table4.smc.phi_deg']:.2f} / {g['table4.smc.theta_deg']:.2f} "
+              f"| {g['table4.flc.phi_deg']:.2f} / {g['table4.flc.theta_deg']:.2f} "
+              f"| {g['table6.flc.phi_deg']:.2f} / {g['table6.flc.theta_deg']:.2f} / {g['table6.flc.psi_deg']:.2f} "
+              f"| {g['table6.smc-flc.phi_deg']:.2f} / {g['table6.smc-flc.theta_deg']:.2f} / "
+              f"{g['table6.smc-flc.psi_deg']:.2f} | {tilt('table4.smc') / tilt('table6.smc-flc'):.2f} "
+              f"| {tilt('table4.flc') / tilt('table6.flc'):.2f} | {_within(logs)} "
+              f"| {math.sqrt(np.mean(np.square(logs))):.3f} | {_within(t6)} | {held} of {n} |", flush=True)
+    paper = {t.metric: t.value for t in targets}
+
+    def ptilt(prefix):
+        return 0.5 * (paper[f"{prefix}.phi_deg"] + paper[f"{prefix}.theta_deg"])
+    print(f"\nthe paper: SMC Table 4 / Table 6 {ptilt('table4.smc') / ptilt('table6.smc-flc'):.2f}, "
+          f"FLC {ptilt('table4.flc') / ptilt('table6.flc'):.2f}")
+
+
 def point(base: list, workers: int) -> None:
     mean, targets = numbers(base, workers)
     logs = _logs(mean, targets, [t.metric for t in targets])
@@ -87,7 +133,7 @@ def point(base: list, workers: int) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("study", choices=("rate-share", "yaw", "point"))
+    ap.add_argument("study", choices=("rate-share", "yaw", "delay", "point"))
     ap.add_argument("--values", help="comma-separated values of the scanned setting")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="override on every point (repeatable)")
@@ -97,9 +143,10 @@ def main() -> None:
     if a.study == "point":
         point(base, a.workers)
         return
-    default = RATE_SHARES if a.study == "rate-share" else YAW_TORQUES
+    study, default = {"rate-share": (rate_share, RATE_SHARES), "yaw": (yaw, YAW_TORQUES),
+                      "delay": (delay, DELAYS)}[a.study]
     values = [float(v) for v in a.values.split(",")] if a.values else list(default)
-    (rate_share if a.study == "rate-share" else yaw)(values, base, a.workers)
+    study(values, base, a.workers)
 
 
 if __name__ == "__main__":
