@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from gcs_tools.identify.paper import FACTOR_2, PaperProblem, load_data, log_residual, select_targets
+from gcs_tools.identify.paper import FACTOR_2, PaperProblem, _mass_claims, load_data, log_residual, select_targets
 from gcs_tools.identify.params import parse_params_arg
 from gcs_tools.identify.problem import Base
 from gcs_tools.reproduce import exp_masses, exp_shocks
@@ -104,3 +104,39 @@ def test_several_seeds_give_the_mean_of_their_numbers():
         assert merged[k] == pytest.approx(0.5 * (per_seed[0][k] + per_seed[1][k])), k
     assert len(both.residuals(merged)) == 8
     assert both.context()["seeds"] == 2 and "seeds" not in PaperProblem(Base()).context()
+
+
+class _Job:
+    def __init__(self, label, strategy):
+        self.label, self.strategy = label, strategy
+
+
+class _Run:
+    """A stand-in for an extra-mass run: what exp_masses.summarise reads."""
+
+    def __init__(self, mass_g, strategy, chatter_v, diverge_at=None):
+        self.job = _Job(f"masses/{strategy}/{mass_g:g}g", strategy)
+        t = np.arange(0.0, 4.0, 0.002)
+        roll = np.zeros_like(t)
+        if diverge_at is not None:
+            roll[t >= diverge_at] = math.radians(60.0)
+        euler = np.column_stack([roll, np.zeros_like(t), np.zeros_like(t)])
+        v = 11.7 + chatter_v * math.sqrt(2.0) * np.sin(2 * math.pi * 50.0 * t)  # 50 Hz, rms chatter_v
+        self.series = {"t": t, "euler": euler, "euler_des": np.zeros_like(euler), "euler_true": euler,
+                       "v_cmd": np.column_stack([v] * 4)}
+
+
+def test_the_extra_mass_claims_count_a_lost_mass_as_the_reproduction_does():
+    held = [_Run(40, "smc", 0.4), _Run(40, "flc", 0.1), _Run(100, "smc", 0.5), _Run(100, "flc", 0.2)]
+    m = _mass_claims(held)
+    assert m["claim.masses_flc_over_smc_chattering"] == pytest.approx(0.4, rel=1e-3)  # the worse mass, 0.2 / 0.5
+    assert m["claim.masses_smc_diverged"] == 0.0
+    smc_lost = held[:2] + [_Run(100, "smc", 0.5, diverge_at=2.0), _Run(100, "flc", 0.9)]
+    m = _mass_claims(smc_lost)
+    assert m["claim.masses_flc_over_smc_chattering"] == pytest.approx(0.25, rel=1e-3)  # the lost mass counts 0
+    assert m["claim.masses_smc_diverged"] == 1.0
+    flc_lost = held[:2] + [_Run(100, "smc", 0.5), _Run(100, "flc", 0.2, diverge_at=2.0)]
+    assert math.isnan(_mass_claims(flc_lost)["claim.masses_flc_over_smc_chattering"])
+    _, claims = load_data()
+    smoother = next(c for c in claims if c.claim == "flc_smoother_extra_mass")
+    assert smoother.residual(math.nan) == log_residual(math.nan, 1.0)  # a lost FLC is the missing residual
