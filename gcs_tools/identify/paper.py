@@ -257,8 +257,8 @@ def _shock_claims(runs: list) -> dict:
     return {
         "claim.shocks_smc_over_flc_settling": _ratio(smc["settling"], flc["settling"]),
         "claim.shocks_flc_over_smc_chattering": _ratio(flc["chattering"], smc["chattering"]),
-        "claim.shocks_flc_over_smc_overshoot": max(_ratio(flc["overshoot"], smc["overshoot"]),
-                                                   _ratio(flc["peak"], smc["peak"])),
+        "claim.shocks_flc_over_smc_overshoot": _worst([_ratio(flc["overshoot"], smc["overshoot"]),
+                                                       _ratio(flc["peak"], smc["peak"])]),
     }
 
 
@@ -283,8 +283,14 @@ def _mass_claims(runs: list) -> dict:
             ratios.append(0.0)
         else:
             ratios.append(_ratio(flc["chattering_v_rms"], smc["chattering_v_rms"]))
-    return {"claim.masses_flc_over_smc_chattering": max(ratios, key=lambda v: math.inf if math.isnan(v) else v),
+    return {"claim.masses_flc_over_smc_chattering": _worst(ratios),
             "claim.masses_smc_diverged": float(sum(r["smc"]["diverged_at_s"] is not None for r in per.values()))}
+
+
+def _worst(values: list) -> float:
+    """The largest value; nan (the missing residual) when any is nan (Python's max would keep or
+    drop a nan depending on its place in the list)."""
+    return math.nan if any(math.isnan(v) for v in values) else max(values)
 
 
 def _ratio(a: float, b: float) -> float:

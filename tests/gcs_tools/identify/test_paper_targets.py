@@ -140,3 +140,5 @@ def test_the_extra_mass_claims_count_a_lost_mass_as_the_reproduction_does():
     _, claims = load_data()
     smoother = next(c for c in claims if c.claim == "flc_smoother_extra_mass")
     assert smoother.residual(math.nan) == log_residual(math.nan, 1.0)  # a lost FLC is the missing residual
+    # a lost FLC is missing wherever it comes in the list
+    assert math.isnan(_mass_claims(flc_lost[2:] + held[:2])["claim.masses_flc_over_smc_chattering"])
