@@ -79,25 +79,30 @@ def _median(values) -> float:
     return float(np.median(np.asarray(values, dtype=float))) if len(values) else math.nan
 
 
+def summarise(result) -> dict:
+    """One run's figures: every shock's response and settling, their counts and medians, the mean
+    overshoot and peak, and the chattering (what :func:`analyse` reports and ``rig-gcs identify
+    --claims`` fits)."""
+    resp = responses(result)
+    sett = settling(result, resp)
+    return {
+        "shocks": [{"t_s": x.t_shock, "axis": AXES[x.axis], "peak_deg": x.peak, "settling_s": st[0],
+                    "final_deg": st[1], "band_deg": st[2], "settling_to_zero_s": x.settling_s,
+                    "window_s": x.t_end - x.t_shock, "overshoot_pct": x.overshoot_pct}
+                   for x, st in zip(resp, sett)],
+        "settled": sum(math.isfinite(st[0]) for st in sett),
+        "median_settling_s": _median([st[0] for st in sett]),
+        "settled_to_zero": sum(x.settled for x in resp),
+        "median_settling_to_zero_s": _median([x.settling_s for x in resp]),
+        "mean_overshoot_pct": float(np.mean([x.overshoot_pct for x in resp])) if resp else math.nan,
+        "mean_abs_peak_deg": float(np.mean([abs(x.peak) for x in resp])) if resp else math.nan,
+        "chattering_v_rms": hf_rms(result.series["t"], result.series["v_cmd"], CUTOFF_HZ),
+        "lambda_reading": result.job.config()["smc.lambda_reading"],
+    }
+
+
 def analyse(ctx: Context, results: list, live=None) -> Section:
-    per = {}
-    for r in results:
-        resp = responses(r)
-        sett = settling(r, resp)
-        per[r.job.strategy] = {
-            "shocks": [{"t_s": x.t_shock, "axis": AXES[x.axis], "peak_deg": x.peak, "settling_s": st[0],
-                        "final_deg": st[1], "band_deg": st[2], "settling_to_zero_s": x.settling_s,
-                        "window_s": x.t_end - x.t_shock, "overshoot_pct": x.overshoot_pct}
-                       for x, st in zip(resp, sett)],
-            "settled": sum(math.isfinite(st[0]) for st in sett),
-            "median_settling_s": _median([st[0] for st in sett]),
-            "settled_to_zero": sum(x.settled for x in resp),
-            "median_settling_to_zero_s": _median([x.settling_s for x in resp]),
-            "mean_overshoot_pct": float(np.mean([x.overshoot_pct for x in resp])) if resp else math.nan,
-            "mean_abs_peak_deg": float(np.mean([abs(x.peak) for x in resp])) if resp else math.nan,
-            "chattering_v_rms": hf_rms(r.series["t"], r.series["v_cmd"], CUTOFF_HZ),
-            "lambda_reading": r.job.config()["smc.lambda_reading"],
-        }
+    per = {r.job.strategy: summarise(r) for r in results}
     rows = []
     for strat in STRATEGIES:
         for x in per[strat]["shocks"]:

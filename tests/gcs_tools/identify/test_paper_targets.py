@@ -56,9 +56,10 @@ def test_the_shock_and_mass_claims_read_the_runs_as_the_reproduction_does(evalua
     assert metrics["claim.shocks_flc_over_smc_chattering"] == pytest.approx(chatter["flc"] / chatter["smc"])
     hinge = dict(zip(problem.residual_names(), residuals))
     ctx = Context(seed=0, quick=False, out_dir=tmp_path)
-    verdicts = {v.claim: v.status for v in exp_shocks.analyse(ctx, shocks).verdicts}
+    shock_section = exp_shocks.analyse(ctx, shocks)
+    verdicts = {v.claim: v.status for v in shock_section.verdicts}
     verdicts.update({v.claim: v.status for v in exp_masses.analyse(ctx, masses).verdicts})
-    settled = exp_shocks.analyse(ctx, shocks).numbers
+    settled = shock_section.numbers
     for claim in ("flc_no_chattering", "flc_less_overshoot", "flc_smoother_extra_mass", "smc_holds_extra_mass",
                   "smc_settles_faster"):
         if claim == "smc_settles_faster" and not all(
