@@ -348,6 +348,12 @@ SCHEMA: dict[str, Spec] = {
     "vibration.accel_amplitude": V3("frame vibration per rotor at hover rotor speed: accelerometer amplitude per "
                                     "body axis", "m/s^2", 0.0, 100.0),
     "vibration.blades": I("propeller blades (the vibration is at the blade-pass frequency, blades x rotor speed)", 1, 8),
+    "motor_field.ripple_uT": F("magnetic field of a motor's current ripple at the IMU modules (the driver's PWM and "
+                               "commutation ripple aliased by the magnetometer sampling): rms per sample per motor "
+                               "at hover current, horizontal and perpendicular to its arm", "uT", 0.0, 47.0),
+    "motor_field.steady_uT": F("steady magnetic field of a motor's supply leads at the IMU modules at hover current, "
+                               "horizontal and perpendicular to its arm (opposite arms cancel at equal currents)",
+                               "uT", 0.0, 47.0),
     "disturbance.gusts": Spec(
         "table_list",
         "1-cosine gusts added to the wind force",

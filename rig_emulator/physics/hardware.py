@@ -24,6 +24,8 @@ effect (function)               acts on                                parameter
 :func:`frame_vibration_step`    IMU gyro and accelerometer inputs,     ``vibration.gyro_amplitude``,
                                 the same on all five modules           ``vibration.accel_amplitude``,
                                                                        ``vibration.blades``
+:func:`motor_field_step`        magnetometer inputs, the same on all   ``motor_field.ripple_uT``,
+                                five modules                           ``motor_field.steady_uT``
 ==============================  =====================================  ==========================================
 
 Model mismatch (``controller_model.*``) and the position FLC's rate input
@@ -72,6 +74,10 @@ HardwareParams = namedtuple(
         "vib_blades",      # blades per rotor (the blade-pass frequency is blades x rotor speed)
         "vib_omega_ref",   # hover rotor speed, rad/s (amplitudes scale with (Omega / this)^2)
         "vib_phase",       # (4,) blade-pass phase of each rotor, rad (state)
+        "mag_on",          # bool: a magnetic field of the motor currents at the modules
+        "mag_ripple",      # rms field per motor per magnetometer sample at hover current, T
+        "mag_steady",      # steady field per motor at hover current, T
+        "mag_f_hover",     # hover thrust per motor, N (the current scales with (f / this)^1.5)
         "curve_memo",      # (4, 2) per motor the last (V / V_p, (V / V_p)^n) of motor_thrust (a cache; new with n)
     ],
 )
@@ -325,3 +331,47 @@ def frame_vibration_step(dt, x, pp, vib_out):
         for j in range(3):
             vib_out[j] += hw.vib_gyro[j] * s
             vib_out[3 + j] += hw.vib_acc[j] * s
+
+
+# --- magnetic field of the motor currents ------------------------------------------------
+
+# Unit vector in B (FRD) of the field at the hub of the supply leads running along arm i (A6
+# numbering minus one, arms along +x, +y, -x, -y: rigid_body.py): horizontal and perpendicular to
+# the arm (Biot-Savart), z_B x a_i; opposite arms carry their currents in opposite senses, so at
+# equal currents their steady fields cancel.
+_LEAD_FIELD_X = (0.0, -1.0, 0.0, 1.0)
+_LEAD_FIELD_Y = (1.0, 0.0, -1.0, 0.0)
+
+
+@jit(inline="always")
+def motor_field_step(x, pp, field_out):
+    """Magnetic field of the four motors' currents at the IMU modules (B, T), one magnetometer sample.
+
+    Each motor's supply and phase leads run along its arm past the hub where the five modules sit
+    (within 3 cm of each other, so all five see the same field and the ensemble of Sec. 4-1 cannot
+    average it away). Motor ``i`` draws ``I_i = I_hover (f_i / f_hover)^1.5`` (momentum theory: the
+    propeller's shaft power goes with thrust^1.5, at a fixed supply the current with the power;
+    ``f_i`` the motor's true thrust, Eq. 40 and :func:`motor_thrust`); its leads' field at the hub
+    is ``(I_i / I_hover) (B_steady + B_ripple w_i) d_i``, ``d_i`` horizontal and perpendicular to
+    arm ``i`` and ``w_i`` standard normal per sample: the PWM and commutation ripple of the driver's
+    current (kHz) aliased by the magnetometer's sampling, independent between motors. Magnitude:
+    a lead pair 5 mm apart 4 cm from the modules carrying the hover current (about 3.2 A: the 6 A
+    drivers of Sec. 4-1 at the 850 gr.F ceiling, scaled by (557.7 / 850)^1.5) gives
+    ``mu0 I s / (2 pi r^2)`` = 2 uT of steady field (20 mG, 4 % of the site's 47 uT); the ripple is
+    a fraction of that after the drivers' input capacitors. This is what ArduPilot's compass-motor
+    calibration measures (field per amp of current). ``x`` is the rig state (motor voltages in
+    ``x[13:17]``), ``pp`` the PhysicsParams; writes ``field_out`` (3,).
+    """
+    hw = pp.hw
+    fx = 0.0
+    fy = 0.0
+    for i in range(4):
+        f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], hw)
+        if f > 0.0:
+            r = f / hw.mag_f_hover
+            b = r * math.sqrt(r) * (hw.mag_steady + hw.mag_ripple * _normal(hw.rng))
+            fx += b * _LEAD_FIELD_X[i]
+            fy += b * _LEAD_FIELD_Y[i]
+    field_out[0] = fx
+    field_out[1] = fy
+    field_out[2] = 0.0

@@ -238,7 +238,7 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
     it unboxes); the step loop calls :func:`_sample_imu_modules`, the same without it
     (``rig_emulator/_jit.py``).
     """
-    _sample_imu_modules(q, omega_B, omega_dot_B, np.zeros(6), do_inertial, do_mag, k, walk, fault_mode,
+    _sample_imu_modules(q, omega_B, omega_dot_B, np.zeros(6), np.zeros(3), do_inertial, do_mag, k, walk, fault_mode,
                         fault_magnitude, rng, raw_out)
 
 
@@ -246,13 +246,16 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
 # sample_imu_modules for the calibration); inlining it together with control_update (13ee116, typing
 # it twice) cost about 12 % of the cold compile for about 0.1 us a step (benchmarks/README.md, hardware-rig)
 @jit(nrt=False)
-def _sample_imu_modules(q, omega_B, omega_dot_B, vib, do_inertial, do_mag, k, walk, fault_mode, fault_magnitude,
-                        rng, raw_out):
+def _sample_imu_modules(q, omega_B, omega_dot_B, vib, field_B, do_inertial, do_mag, k, walk, fault_mode,
+                        fault_magnitude, rng, raw_out):
     """:func:`sample_imu_modules` without reference counting, for the step loop.
 
     ``vib`` (6,): the frame vibration every module sees alike (issue 13,
     :func:`rig_emulator.physics.hardware.frame_vibration_step`): gyro (0:3, rad/s) added to
     ``omega_B``, accelerometer (3:6, m/s^2) added to the specific force; zeros on the ideal plant.
+    ``field_B`` (3,): the magnetic field of the motor currents at the modules (issue 13,
+    :func:`rig_emulator.physics.hardware.motor_field_step`), T, added to the Earth's field every
+    module measures; zeros on the ideal plant.
     """
     q0 = q[0]
     q1 = q[1]
@@ -275,9 +278,9 @@ def _sample_imu_modules(q, omega_B, omega_dot_B, vib, do_inertial, do_mag, k, wa
     mw0 = k.earth_field_W[0]
     mw1 = k.earth_field_W[1]
     mw2 = k.earth_field_W[2]
-    mbx = r00 * mw0 + r10 * mw1 + r20 * mw2
-    mby = r01 * mw0 + r11 * mw1 + r21 * mw2
-    mbz = r02 * mw0 + r12 * mw1 + r22 * mw2
+    mbx = r00 * mw0 + r10 * mw1 + r20 * mw2 + field_B[0]
+    mby = r01 * mw0 + r11 * mw1 + r21 * mw2 + field_B[1]
+    mbz = r02 * mw0 + r12 * mw1 + r22 * mw2 + field_B[2]
     wx = omega_B[0]
     wy = omega_B[1]
     wz = omega_B[2]

@@ -40,6 +40,7 @@ SensorState = namedtuple(
         "cell_fault_mode",       # (n_cells,) int64
         "cell_fault_magnitude",  # (n_cells,) float64
         "frame_vibration",       # (6,) gyro (rad/s), accel (m/s^2) every module sees alike (issue 13)
+        "motor_field",           # (3,) magnetic field of the motor currents at the modules, B, T (issue 13)
     ],
 )
 
@@ -54,6 +55,7 @@ def make_sensor_suite(imu: ImuModulesTruth, cells: LoadCellTruth) -> tuple[Senso
         cell_fault_mode=np.zeros(c, dtype=np.int64),
         cell_fault_magnitude=np.zeros(c),
         frame_vibration=np.zeros(6),
+        motor_field=np.zeros(3),
     )
     return SensorSuite(imu.kernel, cells.kernel), state
 
@@ -75,7 +77,8 @@ def sensors_step(step_index, q, omega_B, omega_dot_B, thrust_N, rotor_speed_rad_
     mask = 0
     if do_inertial or do_mag:
         # the variant without reference counting: this runs on every step loop sample
-        _sample_imu_modules(q, omega_B, omega_dot_B, state.frame_vibration, do_inertial, do_mag, imu, state.imu_walk,
+        _sample_imu_modules(q, omega_B, omega_dot_B, state.frame_vibration, state.motor_field, do_inertial, do_mag, imu,
+                            state.imu_walk,
                             state.imu_fault_mode, state.imu_fault_magnitude, rng, imu_raw_out)
         if do_inertial:
             mask |= SAMPLED_INERTIAL

@@ -48,7 +48,8 @@ from rig_emulator.estimation.onboard_position import onboard_translation_step
 from rig_emulator.guidance.runner import GS_INDEX, guidance_update
 from rig_emulator.physics.disturbances import wind_force
 from rig_emulator.physics.integrator import rk4_step
-from rig_emulator.physics.hardware import actuator_chain, frame_vibration_step, motor_thrust, torque_noise_step
+from rig_emulator.physics.hardware import (actuator_chain, frame_vibration_step, motor_field_step, motor_thrust,
+                                           torque_noise_step)
 from rig_emulator.physics.motors import rotor_speed
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates
 from rig_emulator.sensors.sensor_step import SAMPLED_CELLS, sensors_step
@@ -67,6 +68,8 @@ def _sense(k, x, pp, sp, ss, rng, omega_dot):
             ss.rotor_speed[i] = rotor_speed(f, pp.kf)
     if pp.hw.vib_on and k % sp.suite.imu.decim_inertial == 0:  # issue 13: frame vibration, all modules alike
         frame_vibration_step(sp.suite.imu.dt_s * sp.suite.imu.decim_inertial, x, pp, ss.sstate.frame_vibration)
+    if pp.hw.mag_on and k % sp.suite.imu.decim_mag == 0:  # issue 13: the motor currents' field, all modules alike
+        motor_field_step(x, pp, ss.sstate.motor_field)
     mask = sensors_step(k, x[6:10], x[10:13], omega_dot, ss.thrust_true, ss.rotor_speed,
                         sp.suite, ss.sstate, rng, ss.imu_raw, ss.cell_raw)
     if mask == 0:

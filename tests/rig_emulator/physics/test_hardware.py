@@ -8,7 +8,8 @@ import pytest
 from rig_emulator.config.loader import load_config
 from rig_emulator.physics import state as S
 from rig_emulator.physics.hardware import (actuator_chain, cog_gravity_torque, frame_vibration_step,
-                                           joint_friction_torque, motor_thrust, torque_noise_step)
+                                           joint_friction_torque, motor_field_step, motor_thrust,
+                                           torque_noise_step)
 from rig_emulator.physics.motors import GRAM_FORCE_N
 from rig_emulator.physics.rotation import quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, physics_params, smc_gains_si
@@ -30,7 +31,7 @@ def _rot(phi=0.0, theta=0.0, psi=0.0):
 
 def test_the_ideal_plant_has_no_effect_switched_on():
     hw = physics_params(IDEAL).hw
-    assert not (hw.friction or hw.cog_on or hw.act_on or hw.noise_on or hw.vib_on)
+    assert not (hw.friction or hw.cog_on or hw.act_on or hw.noise_on or hw.vib_on or hw.mag_on)
     assert hw.curve_n == 1.0 and np.all(hw.gain == 1.0) and hw.bias == 0.0
 
 
@@ -159,6 +160,51 @@ def test_frame_vibration_is_at_the_blade_pass_frequency_with_the_hover_amplitude
     f_seen = freqs[np.argmax(spec)]
     f_alias = abs(f_blade - round(f_blade * dt) / dt)  # sampled at 500 Hz
     assert f_seen == pytest.approx(f_alias, abs=1.0)
+
+
+def _field_series(thrust_per_motor_N, ripple_uT=0.0, steady_uT=0.0, n=20000, seed=3):
+    pp = _pp(**{"motor_field.ripple_uT": ripple_uT, "motor_field.steady_uT": steady_uT, "sim.seed": seed})
+    x = np.zeros(S.SIZE)
+    x[S.MOTOR_V : S.MOTOR_V + 4] = np.asarray(thrust_per_motor_N, dtype=float) / pp.k_v  # Eq. 40, ideal curve
+    out = np.zeros((n, 3))
+    for i in range(n):
+        motor_field_step(x, pp, out[i])
+    return out, pp
+
+
+def test_motor_field_ripple_has_the_hover_rms_per_motor_across_the_arms_and_is_seeded():
+    hover = physics_params(IDEAL).mass * 9.81 / 4.0
+    b, pp = _field_series([hover] * 4, ripple_uT=0.3)
+    assert pp.hw.mag_on
+    # two motors' leads on each horizontal body axis (arms along x give a field along y and back)
+    assert b[:, 0].std() == pytest.approx(math.sqrt(2) * 0.3e-6, rel=0.03)
+    assert b[:, 1].std() == pytest.approx(math.sqrt(2) * 0.3e-6, rel=0.03)
+    assert np.all(b[:, 2] == 0.0) and abs(b[:, 0].mean()) < 0.05 * 0.3e-6
+    lag = b[1:, 0] @ b[:-1, 0] / (b[:, 0] @ b[:, 0])
+    assert abs(lag) < 0.03  # white: the driver's kHz ripple aliased by the sampling
+    again, _ = _field_series([hover] * 4, ripple_uT=0.3)
+    other, _ = _field_series([hover] * 4, ripple_uT=0.3, seed=4)
+    assert np.array_equal(b, again) and not np.array_equal(b, other)
+
+
+def test_motor_field_grows_with_the_current_as_thrust_to_the_1_5_and_vanishes_with_the_motors_off():
+    hover = physics_params(IDEAL).mass * 9.81 / 4.0
+    lo, _ = _field_series([hover] * 4, ripple_uT=0.3, n=8000)
+    hi, _ = _field_series([1.2 * hover] * 4, ripple_uT=0.3, n=8000)  # under the 714 gr.F ceiling
+    assert hi[:, 0].std() / lo[:, 0].std() == pytest.approx(1.2 ** 1.5, rel=0.04)
+    off, _ = _field_series([0.0] * 4, ripple_uT=0.3, steady_uT=2.0, n=10)
+    assert np.all(off == 0.0)
+
+
+def test_motor_field_steady_part_cancels_between_opposite_arms_and_follows_a_differential():
+    hover = physics_params(IDEAL).mass * 9.81 / 4.0
+    even, _ = _field_series([hover] * 4, steady_uT=2.0, n=1)
+    assert np.all(np.abs(even) < 1e-18)
+    # pitch: motor 1 (arm +x) up, motor 3 (arm -x) down; their leads' fields lie along y
+    d = 0.1 * hover
+    pitch, _ = _field_series([hover + d, hover, hover - d, hover], steady_uT=2.0, n=1)
+    expect = 2.0e-6 * ((1.1 ** 1.5) - (0.9 ** 1.5))
+    assert pitch[0, 1] == pytest.approx(expect, rel=1e-9) and pitch[0, 0] == 0.0
 
 
 def test_model_mismatch_and_readings_enter_the_controllers_only():
