@@ -154,6 +154,8 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "vibration.gyro_amplitude": ("VIB_GYRO", XYZ),
     "vibration.accel_amplitude": ("VIB_ACC", XYZ),
     "vibration.blades": ("VIB_BLADES", None),
+    "motor_field.ripple_uT": ("MAGM_RIPPLE", None),
+    "motor_field.steady_uT": ("MAGM_STEADY", None),
 }
 
 #: schema keys that are not parameters of a running rig, and why
