@@ -74,10 +74,8 @@ HardwareParams = namedtuple(
         "vib_blades",      # blades per rotor (the blade-pass frequency is blades x rotor speed)
         "vib_omega_ref",   # hover rotor speed, rad/s (amplitudes scale with (Omega / this)^2)
         "vib_phase",       # (4,) blade-pass phase of each rotor, rad (state)
-        "mag_on",          # bool: a magnetic field of the motor currents at the modules
-        "mag_ripple",      # rms field per motor per magnetometer sample at hover current, T
-        "mag_steady",      # steady field per motor at hover current, T
-        "mag_f_hover",     # hover thrust per motor, N (the current scales with (f / this)^1.5)
+        "mag_ripple",      # rms field per motor per magnetometer sample at hover current, T (0: off)
+        "mag_steady",      # steady field per motor at hover current, T (0: off)
         "curve_memo",      # (4, 2) per motor the last (V / V_p, (V / V_p)^n) of motor_thrust (a cache; new with n)
     ],
 )
@@ -343,7 +341,9 @@ _LEAD_FIELD_X = (0.0, -1.0, 0.0, 1.0)
 _LEAD_FIELD_Y = (1.0, 0.0, -1.0, 0.0)
 
 
-@jit(inline="always")
+# a call, not inline="always": it runs at the magnetometer rate only, and inlined into the step loop it
+# slowed both plants by 0.6 us a step (benchmarks/README.md, hardware-rig, session 12)
+@jit(nrt=False)
 def motor_field_step(x, pp, field_out):
     """Magnetic field of the four motors' currents at the IMU modules (B, T), one magnetometer sample.
 
@@ -363,12 +363,13 @@ def motor_field_step(x, pp, field_out):
     ``x[13:17]``), ``pp`` the PhysicsParams; writes ``field_out`` (3,).
     """
     hw = pp.hw
+    f_hover = pp.mass * pp.g / 4.0  # the hover thrust per motor, where the current is I_hover
     fx = 0.0
     fy = 0.0
     for i in range(4):
         f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], hw)
         if f > 0.0:
-            r = f / hw.mag_f_hover
+            r = f / f_hover
             b = r * math.sqrt(r) * (hw.mag_steady + hw.mag_ripple * _normal(hw.rng))
             fx += b * _LEAD_FIELD_X[i]
             fy += b * _LEAD_FIELD_Y[i]

@@ -119,10 +119,8 @@ def hardware_params(cfg: RigConfig, k_v: float, dt: float, previous: HardwarePar
         vib_blades=float(cfg["vibration.blades"]),
         vib_omega_ref=_hover_rotor_speed(cfg),
         vib_phase=phase,
-        mag_on=bool(cfg["motor_field.ripple_uT"] > 0.0 or cfg["motor_field.steady_uT"] > 0.0),
         mag_ripple=cfg["motor_field.ripple_uT"] * 1e-6,
         mag_steady=cfg["motor_field.steady_uT"] * 1e-6,
-        mag_f_hover=cfg["airframe.mass"] * cfg["airframe.gravity"] / 4.0,
         curve_memo=np.full((4, 2), np.nan),
     )
 

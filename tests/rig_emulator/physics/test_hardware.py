@@ -31,7 +31,8 @@ def _rot(phi=0.0, theta=0.0, psi=0.0):
 
 def test_the_ideal_plant_has_no_effect_switched_on():
     hw = physics_params(IDEAL).hw
-    assert not (hw.friction or hw.cog_on or hw.act_on or hw.noise_on or hw.vib_on or hw.mag_on)
+    assert not (hw.friction or hw.cog_on or hw.act_on or hw.noise_on or hw.vib_on)
+    assert hw.mag_ripple == 0.0 and hw.mag_steady == 0.0
     assert hw.curve_n == 1.0 and np.all(hw.gain == 1.0) and hw.bias == 0.0
 
 
@@ -175,7 +176,7 @@ def _field_series(thrust_per_motor_N, ripple_uT=0.0, steady_uT=0.0, n=20000, see
 def test_motor_field_ripple_has_the_hover_rms_per_motor_across_the_arms_and_is_seeded():
     hover = physics_params(IDEAL).mass * 9.81 / 4.0
     b, pp = _field_series([hover] * 4, ripple_uT=0.3)
-    assert pp.hw.mag_on
+    assert pp.hw.mag_ripple == pytest.approx(0.3e-6) and pp.hw.mag_steady == 0.0
     # two motors' leads on each horizontal body axis (arms along x give a field along y and back)
     assert b[:, 0].std() == pytest.approx(math.sqrt(2) * 0.3e-6, rel=0.03)
     assert b[:, 1].std() == pytest.approx(math.sqrt(2) * 0.3e-6, rel=0.03)
