@@ -363,13 +363,13 @@ def motor_field_step(x, pp, field_out):
     ``x[13:17]``), ``pp`` the PhysicsParams; writes ``field_out`` (3,).
     """
     hw = pp.hw
-    f_hover = pp.mass * pp.g / 4.0  # the hover thrust per motor, where the current is I_hover
+    f_hover_inv = 4.0 / (pp.mass * pp.g)  # 1 / the hover thrust per motor, where the current is I_hover
     fx = 0.0
     fy = 0.0
     for i in range(4):
         f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], hw)
         if f > 0.0:
-            r = f / f_hover
+            r = f * f_hover_inv
             b = r * math.sqrt(r) * (hw.mag_steady + hw.mag_ripple * _normal(hw.rng))
             fx += b * _LEAD_FIELD_X[i]
             fy += b * _LEAD_FIELD_Y[i]
