@@ -358,8 +358,9 @@ def motor_field_step(x, pp, field_out):
     a lead pair 5 mm apart 4 cm from the modules carrying the hover current (about 3.2 A: the 6 A
     drivers of Sec. 4-1 at the 850 gr.F ceiling, scaled by (557.7 / 850)^1.5) gives
     ``mu0 I s / (2 pi r^2)`` = 2 uT of steady field (20 mG, 4 % of the site's 47 uT); the ripple is
-    a fraction of that after the drivers' input capacitors. This is what ArduPilot's compass-motor
-    calibration measures (field per amp of current). ``x`` is the rig state (motor voltages in
+    a fraction of that after the drivers' input capacitors (``hilms``: 0.32 uT, fitted to Table 6's
+    two psi; the paper's equal psi bound the steady part near 0: docs/REPRODUCTION.md, "Table 6's
+    yaw"). This is what ArduPilot's compass-motor calibration measures (field per amp of current). ``x`` is the rig state (motor voltages in
     ``x[13:17]``), ``pp`` the PhysicsParams; writes ``field_out`` (3,).
     """
     hw = pp.hw
