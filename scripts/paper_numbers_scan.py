@@ -61,12 +61,16 @@ def numbers(overrides: list, workers: int, claims: bool = False) -> tuple[dict, 
 def _claims_held(mean: dict) -> tuple[int, int]:
     """How many of the claims ``rig-gcs identify --claims`` fits hold on these metrics, of how many."""
     _, claims = load_data()
-    return sum(c.residual(mean[c.metric]) == 0.0 for c in claims), len(claims)
+    return sum(c.holds(mean[c.metric]) for c in claims), len(claims)
 
 
 def _logs(mean: dict, targets, names) -> list[float]:
     paper = {t.metric: t.value for t in targets}
     return [log_residual(mean[n], paper[n]) for n in names]
+
+
+def _rms(values) -> float:
+    return math.sqrt(np.mean(np.square(values)))
 
 
 def _within(logs) -> int:
@@ -85,7 +89,7 @@ def rate_share(values, base: list, workers: int) -> None:
         t6 = _logs(mean, targets, [t.metric for t in targets if t.metric.startswith("table6.")])
         f = [mean[n] for n in position]
         print(f"| {v:g} | {f[0]:.3f} / {f[1]:.3f} / {f[2]:.3f} | {f[3]:.3f} / {f[4]:.3f} / {f[5]:.3f} "
-              f"| {f[6]:.3f} / {f[7]:.3f} | {math.sqrt(np.mean(np.square(pos))):.3f} | {_within(pos)} "
+              f"| {f[6]:.3f} / {f[7]:.3f} | {_rms(pos):.3f} | {_within(pos)} "
               f"| {_within(t6)} | {mean['table6.flc.psi_deg']:.3f} / {mean['table6.smc-flc.psi_deg']:.3f} |",
               flush=True)
 
@@ -120,7 +124,7 @@ def delay(values, base: list, workers: int) -> None:
               f"| {g['table6.smc-flc.phi_deg']:.2f} / {g['table6.smc-flc.theta_deg']:.2f} / "
               f"{g['table6.smc-flc.psi_deg']:.2f} | {_table4_over_table6(g, 'smc'):.2f} "
               f"| {_table4_over_table6(g, 'flc'):.2f} | {_within(logs)} "
-              f"| {math.sqrt(np.mean(np.square(logs))):.3f} | {_within(t6)} | {held} of {n} |", flush=True)
+              f"| {_rms(logs):.3f} | {_within(t6)} | {held} of {n} |", flush=True)
     paper = {t.metric: t.value for t in targets}
     print(f"\nthe paper: SMC Table 4 / Table 6 {_table4_over_table6(paper, 'smc'):.2f}, "
           f"FLC {_table4_over_table6(paper, 'flc'):.2f}")
@@ -143,7 +147,7 @@ def point(base: list, workers: int) -> None:
     print("|---|---|---|---|")
     for t, lr in zip(targets, logs):
         print(f"| {t.metric} | {t.value:.4f} | {mean[t.metric]:.4f} | {lr:+.3f}{' (x2 off)' if abs(lr) > FACTOR_2 else ''} |")
-    print(f"\nrms log error {math.sqrt(np.mean(np.square(logs))):.3f}; {_within(logs)} of {len(logs)} within a "
+    print(f"\nrms log error {_rms(logs):.3f}; {_within(logs)} of {len(logs)} within a "
           f"factor 2")
     level_floor({t.metric: lr for t, lr in zip(targets, logs)})
 
@@ -160,10 +164,10 @@ def level_floor(logs: dict) -> float:
         m = float(np.mean(member))
         dev = [v - m for v in member]
         spread += dev
-        print(f"| {name} | {len(member)} | {m:+.3f} | {math.sqrt(np.mean(np.square(dev))):.3f} |")
+        print(f"| {name} | {len(member)} | {m:+.3f} | {_rms(dev):.3f} |")
     if len(spread) != len(logs):
         raise SystemExit(f"the level groups cover {len(spread)} of the {len(logs)} numbers")
-    floor = math.sqrt(np.mean(np.square(spread)))
+    floor = _rms(spread)
     print(f"\nrms log error with every group at its best level: {floor:.3f}")
     return floor
 

@@ -80,6 +80,10 @@ class Claim:
     def source(self) -> str:
         return CLAIMS[self.claim][1]
 
+    def holds(self, value: float) -> bool:
+        """The claim holds on this metric: its hinge is zero."""
+        return self.residual(value) == 0.0
+
     def residual(self, value: float) -> float:
         if not math.isfinite(value):
             return MISSING_LOG_RESIDUAL
@@ -187,7 +191,7 @@ class PaperProblem(Problem):
             for c in self.claims:
                 v = metrics.get(c.metric, math.nan)
                 claims.append({"claim": c.claim, "text": c.text, "metric": c.metric, "value": v,
-                               "holds": c.residual(v) == 0.0, "note": c.note})
+                               "holds": c.holds(v), "note": c.note})
         return {"targets": rows, "claims": claims, "n": len(rows),
                 "rms_log_error": float(np.sqrt(np.mean(logs ** 2))),
                 "within_factor_2": int(np.sum(np.abs(logs) <= FACTOR_2)),
@@ -263,9 +267,7 @@ def _mass_claims(runs: list) -> dict:
       lost; the claim holds below 1;
     * ``claim.masses_smc_diverged`` - the number of masses the SMC lost; the claim holds at 0.
     """
-    per: dict = {}
-    for r in runs:
-        per.setdefault(r.job.label.rsplit("/", 1)[-1], {})[r.job.strategy] = exp_masses.summarise(r)
+    per, _ = exp_masses.per_mass(runs)
     ratios = []
     for runs_of_mass in per.values():
         smc, flc = runs_of_mass["smc"], runs_of_mass["flc"]

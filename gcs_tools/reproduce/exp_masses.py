@@ -63,12 +63,19 @@ def summarise(result) -> dict:
     return out
 
 
-def analyse(ctx: Context, results: list, live=None) -> Section:
+def per_mass(results: list) -> tuple[dict, dict]:
+    """The runs' figures by mass label ("40g", ...) and strategy (:func:`summarise`), and each
+    label's mass in kg (what :func:`analyse` reports and ``rig-gcs identify --claims`` fits)."""
     per, kg = {}, {}
     for r in results:
         m = _mass(r)
         kg[f"{m * 1000:g}g"] = m
         per.setdefault(f"{m * 1000:g}g", {})[r.job.strategy] = summarise(r)
+    return per, kg
+
+
+def analyse(ctx: Context, results: list, live=None) -> Section:
+    per, kg = per_mass(results)
     rows = []
     for mass, runs in per.items():
         for s in STRATEGIES:

@@ -360,8 +360,9 @@ def motor_field_step(x, pp, field_out):
     ``mu0 I s / (2 pi r^2)`` = 2 uT of steady field (20 mG, 4 % of the site's 47 uT); the ripple is
     a fraction of that after the drivers' input capacitors (``hilms``: 0.32 uT, fitted to Table 6's
     two psi; the paper's equal psi bound the steady part near 0: docs/REPRODUCTION.md, "Table 6's
-    yaw"). This is what ArduPilot's compass-motor calibration measures (field per amp of current). ``x`` is the rig state (motor voltages in
-    ``x[13:17]``), ``pp`` the PhysicsParams; writes ``field_out`` (3,).
+    yaw"). This is what ArduPilot's compass-motor calibration measures (field per amp of current).
+    ``x`` is the rig state (motor voltages in ``x[13:17]``), ``pp`` the PhysicsParams; writes
+    ``field_out`` (3,).
     """
     hw = pp.hw
     f_hover_inv = 4.0 / (pp.mass * pp.g)  # 1 / the hover thrust per motor, where the current is I_hover

@@ -68,7 +68,8 @@ def _sense(k, x, pp, sp, ss, rng, omega_dot):
             ss.rotor_speed[i] = rotor_speed(f, pp.kf)
     if pp.hw.vib_on and k % sp.suite.imu.decim_inertial == 0:  # issue 13: frame vibration, all modules alike
         frame_vibration_step(sp.suite.imu.dt_s * sp.suite.imu.decim_inertial, x, pp, ss.sstate.frame_vibration)
-    if (pp.hw.mag_ripple > 0.0 or pp.hw.mag_steady > 0.0) and k % sp.suite.imu.decim_mag == 0:  # issue 13: the motor currents' field, all modules alike
+    # issue 13: the motor currents' field at the magnetometers, all modules alike
+    if (pp.hw.mag_ripple > 0.0 or pp.hw.mag_steady > 0.0) and k % sp.suite.imu.decim_mag == 0:
         motor_field_step(x, pp, ss.sstate.motor_field)
     mask = sensors_step(k, x[6:10], x[10:13], omega_dot, ss.thrust_true, ss.rotor_speed,
                         sp.suite, ss.sstate, rng, ss.imu_raw, ss.cell_raw)

@@ -108,15 +108,16 @@ def test_several_seeds_give_the_mean_of_their_numbers():
 
 
 class _Job:
-    def __init__(self, label, strategy):
-        self.label, self.strategy = label, strategy
+    def __init__(self, label, strategy, overrides=()):
+        self.label, self.strategy, self.overrides = label, strategy, overrides
 
 
 class _Run:
-    """A stand-in for an extra-mass run: what exp_masses.summarise reads."""
+    """A stand-in for an extra-mass run: what exp_masses.per_mass and summarise read."""
 
     def __init__(self, mass_g, strategy, chatter_v, diverge_at=None):
-        self.job = _Job(f"masses/{strategy}/{mass_g:g}g", strategy)
+        self.job = _Job(f"masses/{strategy}/{mass_g:g}g", strategy,
+                        (("disturbance.extra_masses", [{"mass": mass_g / 1000.0}]),))
         t = np.arange(0.0, 4.0, 0.002)
         roll = np.zeros_like(t)
         if diverge_at is not None:
