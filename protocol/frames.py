@@ -81,9 +81,12 @@ def rotation_zyx(z: float, y: float, x: float) -> np.ndarray:
 
 def _zyx_angles(r: np.ndarray) -> tuple[float, float, float]:
     """(x, y, z) angles of R = Rz(z) Ry(y) Rx(x); y in [-pi/2, pi/2], x and z in (-pi, pi]."""
-    x = float(np.arctan2(r[2, 1], r[2, 2]))
-    y = float(-np.arcsin(min(max(r[2, 0], -1.0), 1.0)))  # np.clip on one number costs ~5 us; same value, NaN kept
-    z = float(np.arctan2(r[1, 0], r[0, 0]))
+    # libm's atan2 and asin (math's), not numpy's: on hosts with AVX-512 numpy runs its own SIMD kernels,
+    # which differ from libm in the last bit for ~6 % of arguments, and the served rig's scalar form
+    # (zyx_angles_xyz) must give these numbers to the bit on every host. min/max, not np.clip (~5 us): NaN kept.
+    x = math.atan2(float(r[2, 1]), float(r[2, 2]))
+    y = -math.asin(min(max(float(r[2, 0]), -1.0), 1.0))
+    z = math.atan2(float(r[1, 0]), float(r[0, 0]))
     return x, y, z
 
 
@@ -125,7 +128,9 @@ def quaternion_from_rotation(r) -> np.ndarray:
         s = 2.0 * np.sqrt(1.0 - r[0, 0] - r[1, 1] + r[2, 2])
         q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
     q = np.array(q)
-    q /= np.linalg.norm(q)
+    # The squares summed in order, not np.linalg.norm: numpy's norm is BLAS's dot, whose sum order
+    # depends on the host's SIMD kernel (AVX-512 pairs the terms), and the scalar form must match it.
+    q /= np.sqrt(((0.0 + q[0] * q[0]) + q[1] * q[1]) + q[2] * q[2] + q[3] * q[3])
     return -q if q[0] < 0.0 else q
 
 
@@ -240,8 +245,9 @@ def mavlink_quaternion_from_quat_wb(q_wb) -> tuple[float, float, float, float]:
 # second. "Bit for bit" holds where the operations are the same IEEE operations in the same
 # order: a product with T_NED_ENU is a permutation whose sums start from +0 (as numpy's matmul
 # does: a zero entry comes out +0, a NaN or infinity elsewhere in the row still spreads);
-# np.linalg.norm of four numbers is the square root of their squares summed in order;
-# math.atan2, asin and sqrt are the libm functions numpy calls. Non-finite entries (a diverged
+# a quaternion's norm is the square root of its squares summed in order (sqrt is correctly
+# rounded in numpy and libm alike); the angles are math's atan2 and asin in both forms
+# (_zyx_angles). Non-finite entries (a diverged
 # simulation) go through the array forms, whose NaNs carry their own sign bits. tests/protocol/test_frames_scalar.py
 # checks each against its array form (random attitudes, signed zeros, NaN).
 

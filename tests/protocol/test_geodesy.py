@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from protocol import geodesy as geo
+from tests.float_bits import same_or_within_ulps
 
 homes = st.builds(
     geo.Home,
@@ -192,18 +193,25 @@ def test_tangent_plane_matches_local_enu_to_global(lat, lon, alt, enu):
 
 @settings(max_examples=500)
 @given(homes, offsets)
-def test_scalar_ecef_to_geodetic_is_bit_identical(home, enu):
-    """The served rig's scalar conversion gives exactly numpy's numbers."""
+def test_scalar_ecef_to_geodetic_matches_numpy(home, enu):
+    """The served rig's scalar conversion gives numpy's numbers: to the bit where numpy calls libm
+    (tests/float_bits.py), else within 4 ulps (the height: of the Earth's radius, the size of the
+    terms it is the difference of)."""
     ecef = geo.geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m) + np.asarray(enu) @ geo.ecef_to_enu_rotation(
         home.lat_deg, home.lon_deg)
-    assert geo.ecef_to_geodetic_xyz(*ecef.tolist()) == geo.ecef_to_geodetic(ecef)
+    assert _same_geodetic(geo.ecef_to_geodetic_xyz(*ecef.tolist()), geo.ecef_to_geodetic(ecef))
 
 
-def test_scalar_ecef_to_geodetic_is_bit_identical_on_many_points():
+def _same_geodetic(got, want) -> bool:
+    return (same_or_within_ulps(got[:2], want[:2])
+            and same_or_within_ulps(got[2:], want[2:], scale=geo.WGS84_A_M))
+
+
+def test_scalar_ecef_to_geodetic_matches_numpy_on_many_points():
     rng = np.random.default_rng(11)
     for home in (geo.Home(35.7, 51.4, 1200.0), geo.Home(-33.9, 151.2, 10.0), geo.Home(89.9, -179.0, -50.0)):
         origin = geo.geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m)
         r = geo.ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
         for _ in range(3000):
             ecef = origin + rng.normal(0.0, 10.0 ** float(rng.integers(-2, 5)), 3) @ r
-            assert geo.ecef_to_geodetic_xyz(*ecef.tolist()) == geo.ecef_to_geodetic(ecef)
+            assert _same_geodetic(geo.ecef_to_geodetic_xyz(*ecef.tolist()), geo.ecef_to_geodetic(ecef))
