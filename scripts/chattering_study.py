@@ -1,0 +1,114 @@
+"""Where the FLC's chattering on ``hilms`` comes from (Fig. 12's "FLC eliminates the chattering SMC
+shows in hover with shocks"; docs/REPRODUCTION.md, "The FLC's chattering on the hardware rig").
+
+    python scripts/chattering_study.py [--seeds 3] [--workers 2]
+
+Runs the reproduction's ``hover-shocks`` job (SMC and FLC, 20 s, 500 Hz log) on three kinds of plant:
+``hilms-ideal``; ``hilms-ideal`` plus one effect (or reading) of ``hilms``; ``hilms`` minus one (that
+key set back to its ``hilms-ideal`` value); ``hilms-ideal`` with the effects of :data:`CUMULATIVE` added
+one after another. The effects are the keys on which the two airframes
+differ (``load_config``), the SMC's two Eq. 41 readings taken together, and the heading reading
+together with the motors' field it reads. Per plant: both controllers' chattering as
+``rig-gcs reproduce`` measures it (``exp_shocks.summarise``: RMS of the four motor voltage commands
+above 5 Hz), mean over the seeds, the FLC / SMC ratio and the claim's verdict per seed (y under 0.5,
+p under 1, n otherwise). Last, for ``hilms``, where the FLC's torque commands above 5 Hz sit in
+frequency (share of their power per band, per axis).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from gcs_tools.reproduce import exp_shocks
+from rig_emulator.config.loader import load_config
+from rig_emulator.sweep import SimJob, run_jobs
+
+STRATEGIES = ("smc", "flc")
+GROUPS = {  # keys that act as one reading
+    "smc.gain_reading": "SMC readings (Eq. 41)", "smc.lambda_reading": "SMC readings (Eq. 41)",
+    "estimation.tau_yaw": "heading read at each sample + motors' field",
+    "motor_field.ripple_uT": "heading read at each sample + motors' field",
+}
+BANDS_HZ = ((5.0, 10.0), (10.0, 20.0), (20.0, 50.0), (50.0, 250.0))
+# hilms built up from hilms-ideal in this order (the rest of hilms after the last): the effects whose
+# combination makes the FLC's attitude loop ring (measured: none of them alone does)
+CUMULATIVE = ("SMC readings (Eq. 41)", "motors.curve_exponent", "control.actuation_delay", "joint.cog_offset",
+              "joint.coulomb")
+
+
+def effects() -> dict[str, dict]:
+    """Effect name -> (its ``hilms`` values, its ``hilms-ideal`` values), for every key the two differ on."""
+    hw, ideal = load_config("hilms"), load_config("hilms-ideal")
+    out: dict[str, dict] = {}
+    for key in hw:
+        if key == "airframe.name" or hw[key] == ideal[key]:
+            continue
+        name = GROUPS.get(key, key)
+        entry = out.setdefault(name, {"hilms": {}, "ideal": {}})
+        entry["hilms"][key], entry["ideal"][key] = hw[key], ideal[key]
+    return out
+
+
+def plants() -> list[tuple[str, str, dict]]:
+    """(label, airframe, overrides) of every plant the study runs."""
+    fx = effects()
+    out = [("hilms-ideal", "hilms-ideal", {}), ("hilms", "hilms", {})]
+    for name, values in fx.items():
+        out.append((f"hilms-ideal + {name}", "hilms-ideal", values["hilms"]))
+    for name, values in fx.items():
+        out.append((f"hilms - {name}", "hilms", values["ideal"]))
+    built: dict = {}
+    for name in CUMULATIVE:
+        built.update(fx[name]["hilms"])
+        out.append((f"hilms-ideal + ... + {name}", "hilms-ideal", dict(built)))
+    return out
+
+
+def _job(airframe: str, overrides: dict, strategy: str, seed: int, columns: tuple) -> SimJob:
+    ov = dict(overrides, **{"sim.log_rate_hz": exp_shocks.LOG_HZ})
+    return SimJob("hover-shocks", strategy, seed=seed, overrides=tuple(sorted(ov.items())), airframe=airframe,
+                  columns=columns)
+
+
+def band_shares(t: np.ndarray, x: np.ndarray) -> list[float]:
+    """Share of the power of ``x`` above the first band's lower edge that falls in each of :data:`BANDS_HZ`."""
+    x = x - x.mean()
+    f = np.fft.rfftfreq(x.size, t[1] - t[0])
+    p = np.abs(np.fft.rfft(x)) ** 2
+    total = p[f >= BANDS_HZ[0][0]].sum()
+    return [float(p[(f >= lo) & (f < hi)].sum() / total) for lo, hi in BANDS_HZ]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=3, help="seeds 0 .. N-1 (default 3)")
+    ap.add_argument("--workers", type=int, default=None)
+    args = ap.parse_args()
+    seeds = range(args.seeds)
+    columns = ("t", "euler", "euler_des", "v_cmd")
+    runs = plants()
+    jobs = [_job(air, ov, s, seed, columns) for _, air, ov in runs for seed in seeds for s in STRATEGIES]
+    spectra = [_job("hilms", {}, "flc", seed, ("t", "u")) for seed in seeds]
+    results = run_jobs(jobs + spectra, workers=args.workers)
+    chatter = iter(exp_shocks.summarise(r)["chattering_v_rms"] for r in results[:len(jobs)])
+
+    print(f"chattering: RMS of the motor voltage commands above {exp_shocks.CUTOFF_HZ:g} Hz (V), "
+          f"hover-shocks, mean over seeds 0-{args.seeds - 1}")
+    print(f"{'plant':58s} {'SMC':>7s} {'FLC':>7s} {'FLC/SMC':>8s}  verdicts")
+    for label, _, _ in runs:
+        per_seed = [(next(chatter), next(chatter)) for _ in seeds]
+        smc, flc = (float(np.mean(v)) for v in zip(*per_seed))
+        verdicts = "".join("y" if b < 0.5 * a else ("p" if b < a else "n") for a, b in per_seed)
+        print(f"{label:58s} {smc:7.3f} {flc:7.3f} {flc / smc:8.2f}  [{verdicts}]")
+
+    print(f"\nhilms, FLC: share of the torque commands' power above {BANDS_HZ[0][0]:g} Hz per band, mean over the seeds")
+    print(f"{'axis':6s} " + " ".join(f"{lo:g}-{hi:g} Hz".rjust(11) for lo, hi in BANDS_HZ))
+    for k, axis in ((1, "roll"), (2, "pitch"), (3, "yaw")):
+        shares = np.mean([band_shares(r.series["t"], r.series["u"][:, k]) for r in results[len(jobs):]], axis=0)
+        print(f"{axis:6s} " + " ".join(f"{s:11.2f}" for s in shares))
+
+
+if __name__ == "__main__":
+    main()
