@@ -2,6 +2,7 @@
 shows in hover with shocks"; docs/REPRODUCTION.md, "The FLC's chattering on the hardware rig").
 
     python scripts/chattering_study.py [--seeds 3] [--workers 2]
+    python scripts/chattering_study.py --delay-scan [--seeds 3] [--workers 2]
 
 Runs the reproduction's ``hover-shocks`` job (SMC and FLC, 20 s, 500 Hz log) on three kinds of plant:
 ``hilms-ideal``; ``hilms-ideal`` plus one effect (or reading) of ``hilms``; ``hilms`` minus one (that
@@ -13,6 +14,10 @@ together with the motors' field it reads. Per plant: both controllers' chatterin
 above 5 Hz), mean over the seeds, the FLC / SMC ratio and the claim's verdict per seed (y under 0.5,
 p under 1, n otherwise). Last, for ``hilms``, where the FLC's torque commands above 5 Hz sit in
 frequency (share of their power per band, per axis).
+
+``--delay-scan``: both controllers' chattering on ``hilms-ideal`` with the SMC readings of ``hilms``,
+per sensing-to-actuation delay in :data:`DELAYS_S`, with Eq. 40's line and with ``hilms``'s convex
+motor curve.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ GROUPS = {  # keys that act as one reading
     "estimation.tau_yaw": "heading read at each sample + motors' field",
     "motor_field.ripple_uT": "heading read at each sample + motors' field",
 }
+DELAYS_S = (0.0, 0.004, 0.006, 0.008, 0.010, 0.013)
 BANDS_HZ = ((5.0, 10.0), (10.0, 20.0), (20.0, 50.0), (50.0, 250.0))
 # hilms built up from hilms-ideal in this order (the rest of hilms after the last): the effects whose
 # combination makes the FLC's attitude loop ring (measured: none of them alone does)
@@ -66,6 +72,18 @@ def plants() -> list[tuple[str, str, dict]]:
     return out
 
 
+def delay_plants() -> list[tuple[str, str, dict]]:
+    """(label, airframe, overrides) of the delay scan."""
+    fx = effects()
+    readings, curve = fx["SMC readings (Eq. 41)"], fx["motors.curve_exponent"]
+    out = []
+    for name, values in (("Eq. 40's line", curve["ideal"]), ("convex curve", curve["hilms"])):
+        for delay in DELAYS_S:
+            out.append((f"{name}, delay {delay * 1e3:g} ms", "hilms-ideal",
+                        dict(readings["hilms"], **values, **{"control.actuation_delay": delay})))
+    return out
+
+
 def _job(airframe: str, overrides: dict, strategy: str, seed: int, columns: tuple) -> SimJob:
     ov = dict(overrides, **{"sim.log_rate_hz": exp_shocks.LOG_HZ})
     return SimJob("hover-shocks", strategy, seed=seed, overrides=tuple(sorted(ov.items())), airframe=airframe,
@@ -85,12 +103,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3, help="seeds 0 .. N-1 (default 3)")
     ap.add_argument("--workers", type=int, default=None)
+    ap.add_argument("--delay-scan", action="store_true", help="the delay scan with and without the convex curve")
     args = ap.parse_args()
     seeds = range(args.seeds)
     columns = ("t", "euler", "euler_des", "v_cmd")
-    runs = plants()
+    runs = delay_plants() if args.delay_scan else plants()
     jobs = [_job(air, ov, s, seed, columns) for _, air, ov in runs for seed in seeds for s in STRATEGIES]
-    spectra = [_job("hilms", {}, "flc", seed, ("t", "u")) for seed in seeds]
+    spectra = [] if args.delay_scan else [_job("hilms", {}, "flc", seed, ("t", "u")) for seed in seeds]
     results = run_jobs(jobs + spectra, workers=args.workers)
     chatter = iter(exp_shocks.summarise(r)["chattering_v_rms"] for r in results[:len(jobs)])
 
@@ -102,6 +121,8 @@ def main() -> None:
         smc, flc = (float(np.mean(v)) for v in zip(*per_seed))
         verdicts = "".join("y" if b < 0.5 * a else ("p" if b < a else "n") for a, b in per_seed)
         print(f"{label:58s} {smc:7.3f} {flc:7.3f} {flc / smc:8.2f}  [{verdicts}]")
+    if not spectra:
+        return
 
     print(f"\nhilms, FLC: share of the torque commands' power above {BANDS_HZ[0][0]:g} Hz per band, mean over the seeds")
     print(f"{'axis':6s} " + " ".join(f"{lo:g}-{hi:g} Hz".rjust(11) for lo, hi in BANDS_HZ))
