@@ -10,9 +10,9 @@ key set back to its ``hilms-ideal`` value); ``hilms-ideal`` with the effects of 
 one after another. The effects are the keys on which the two airframes
 differ (``load_config``), the SMC's two Eq. 41 readings taken together, and the heading reading
 together with the motors' field it reads. Per plant: both controllers' chattering as
-``rig-gcs reproduce`` measures it (``exp_shocks.summarise``: RMS of the four motor voltage commands
-above 5 Hz), mean over the seeds, the FLC / SMC ratio and the claim's verdict per seed (y under 0.5,
-p under 1, n otherwise), and the same RMS of the roll and pitch errors (what Fig. 12 plots). Last, for ``hilms``, where the FLC's torque commands above 5 Hz sit in
+``rig-gcs reproduce`` measures it (``exp_shocks.summarise``: RMS above 5 Hz of the roll and pitch
+errors, what Fig. 12 plots, and of the four motor voltage commands), mean over the seeds, the FLC /
+SMC ratios and the claim's verdict per seed (``exp_shocks``' own: y, p, n). Last, for ``hilms``, where the FLC's torque commands above 5 Hz sit in
 frequency (share of their power per band, per axis).
 
 ``--delay-scan``: both controllers' chattering on ``hilms-ideal`` with the SMC readings of ``hilms``,
@@ -27,7 +27,7 @@ import argparse
 import numpy as np
 
 from gcs_tools.reproduce import exp_shocks
-from gcs_tools.reproduce.metrics import hf_rms
+from gcs_tools.reproduce.experiment import status_letter
 from rig_emulator.config.loader import load_config
 from rig_emulator.sweep import SimJob, run_jobs
 
@@ -91,13 +91,6 @@ def _job(airframe: str, overrides: dict, strategy: str, seed: int, columns: tupl
                   columns=columns)
 
 
-def angle_hf_deg(result) -> float:
-    """RMS of the roll and pitch errors above the chattering cut-off (deg): the chattering as Fig. 12,
-    which plots the angles, would show it."""
-    s = result.series
-    return hf_rms(s["t"], np.degrees(s["euler"][:, :2] - s["euler_des"][:, :2]), exp_shocks.CUTOFF_HZ)
-
-
 def band_shares(t: np.ndarray, x: np.ndarray) -> list[float]:
     """Share of the power of ``x`` above the first band's lower edge that falls in each of :data:`BANDS_HZ`."""
     x = x - x.mean()
@@ -119,16 +112,21 @@ def main() -> None:
     jobs = [_job(air, ov, s, seed, columns) for _, air, ov in runs for seed in seeds for s in STRATEGIES]
     spectra = [] if args.delay_scan else [_job("hilms", {}, "flc", seed, ("t", "u")) for seed in seeds]
     results = run_jobs(jobs + spectra, workers=args.workers)
-    figures = iter((exp_shocks.summarise(r)["chattering_v_rms"], angle_hf_deg(r)) for r in results[:len(jobs)])
+    figures = iter(exp_shocks.summarise(r) for r in results[:len(jobs)])
 
-    print(f"chattering: RMS of the motor voltage commands above {exp_shocks.CUTOFF_HZ:g} Hz (V), hover-shocks, "
-          f"mean over seeds 0-{args.seeds - 1}; next to it the same of the roll and pitch errors (deg)")
-    print(f"{'plant':58s} {'SMC':>7s} {'FLC':>7s} {'FLC/SMC':>8s}  verdicts  {'SMC deg':>8s} {'FLC deg':>8s}")
+    print(f"chattering in hover-shocks, mean over seeds 0-{args.seeds - 1}: RMS above {exp_shocks.CUTOFF_HZ:g} Hz of "
+          "the roll and pitch errors (deg; what Fig. 12 plots and the verdict reads) and of the motor voltage "
+          "commands (V)")
+    print(f"{'plant':58s} {'SMC deg':>8s} {'FLC deg':>8s} {'FLC/SMC':>8s}  verdicts  {'SMC V':>7s} {'FLC V':>7s} "
+          f"{'FLC/SMC':>8s}")
     for label, _, _ in runs:
         per_seed = [(next(figures), next(figures)) for _ in seeds]
-        smc, flc, smc_deg, flc_deg = np.mean([[a[0], b[0], a[1], b[1]] for a, b in per_seed], axis=0).tolist()
-        verdicts = "".join("y" if b[0] < 0.5 * a[0] else ("p" if b[0] < a[0] else "n") for a, b in per_seed)
-        print(f"{label:58s} {smc:7.3f} {flc:7.3f} {flc / smc:8.2f}  [{verdicts}]    {smc_deg:8.4f} {flc_deg:8.4f}")
+        smc_deg, flc_deg, smc_v, flc_v = np.mean(
+            [[a["chattering_deg_rms"], b["chattering_deg_rms"], a["chattering_v_rms"], b["chattering_v_rms"]]
+             for a, b in per_seed], axis=0).tolist()
+        verdicts = "".join(status_letter(exp_shocks.chattering_verdict(a, b).status) for a, b in per_seed)
+        print(f"{label:58s} {smc_deg:8.4f} {flc_deg:8.4f} {flc_deg / smc_deg:8.2f}  [{verdicts}]    {smc_v:7.3f} "
+              f"{flc_v:7.3f} {flc_v / smc_v:8.2f}")
     if not spectra:
         return
 

@@ -241,7 +241,7 @@ def _shock_claims(runs: list) -> dict:
     * ``claim.shocks_smc_over_flc_settling`` - SMC / FLC median settling time about the final
       value (a shock not settled before the next one counts as its whole window, so the ratio
       stays finite and still moves with the parameters); the claim holds below 1;
-    * ``claim.shocks_flc_over_smc_chattering`` - FLC / SMC motor-command RMS above 5 Hz; the
+    * ``claim.shocks_flc_over_smc_chattering`` - FLC / SMC roll and pitch error RMS above 5 Hz; the
       reproduction's "reproduced" is below 0.5 (FLC without chattering, not just less of it);
     * ``claim.shocks_flc_over_smc_overshoot`` - the larger of FLC / SMC mean overshoot past zero
       and FLC / SMC mean peak deviation (both readings of "overshoot" must hold); below 1.
@@ -252,7 +252,7 @@ def _shock_claims(runs: list) -> dict:
     smc, flc = per["smc"], per["flc"]
     return {
         "claim.shocks_smc_over_flc_settling": _ratio(settling["smc"], settling["flc"]),
-        "claim.shocks_flc_over_smc_chattering": _ratio(flc["chattering_v_rms"], smc["chattering_v_rms"]),
+        "claim.shocks_flc_over_smc_chattering": _ratio(flc["chattering_deg_rms"], smc["chattering_deg_rms"]),
         "claim.shocks_flc_over_smc_overshoot": _worst([_ratio(flc["mean_overshoot_pct"], smc["mean_overshoot_pct"]),
                                                        _ratio(flc["mean_abs_peak_deg"], smc["mean_abs_peak_deg"])]),
     }
@@ -262,7 +262,7 @@ def _mass_claims(runs: list) -> dict:
     """Fig. 15's two claims from the extra-mass runs (:mod:`gcs_tools.reproduce.exp_masses`):
 
     * ``claim.masses_flc_over_smc_chattering`` - the largest over the masses of FLC / SMC
-      motor-command RMS above 5 Hz: 0 for a mass the SMC lost while the FLC held it (the
+      roll and pitch error RMS above 5 Hz: 0 for a mass the SMC lost while the FLC held it (the
       reproduction counts the FLC smoother then), ``nan`` (the missing residual) for one the FLC
       lost; the claim holds below 1;
     * ``claim.masses_smc_diverged`` - the number of masses the SMC lost; the claim holds at 0.
@@ -276,7 +276,7 @@ def _mass_claims(runs: list) -> dict:
         elif smc["diverged_at_s"] is not None:
             ratios.append(0.0)
         else:
-            ratios.append(_ratio(flc["chattering_v_rms"], smc["chattering_v_rms"]))
+            ratios.append(_ratio(flc["chattering_deg_rms"], smc["chattering_deg_rms"]))
     return {"claim.masses_flc_over_smc_chattering": _worst(ratios),
             "claim.masses_smc_diverged": float(sum(r["smc"]["diverged_at_s"] is not None for r in per.values()))}
 

@@ -27,6 +27,11 @@ NOT_RUN = "not run"
 STATUSES = (REPRODUCED, PARTLY, NOT_REPRODUCED, NOT_RUN)
 
 
+def status_letter(status: str) -> str:
+    """A verdict as one letter of a per-seed list: y reproduced, p partly, n otherwise."""
+    return {REPRODUCED: "y", PARTLY: "p"}.get(status, "n")
+
+
 @dataclass(frozen=True)
 class Context:
     """What every experiment's runs share: the seed, the plant (an airframe preset: ``hilms``

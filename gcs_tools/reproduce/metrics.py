@@ -180,6 +180,20 @@ def hf_rms(t, x, cutoff_hz: float) -> float:
     return float(math.sqrt(power[high].sum(axis=0).mean()))
 
 
+def tilt_chattering_deg(t, euler_rad, euler_des_rad, cutoff_hz: float) -> float:
+    """The chattering of a response as Figs. 12 and 15 show it: :func:`hf_rms` of the roll and
+    pitch errors (deg), the attitude the controller sees minus the reference.
+
+    Fig. 12 is "the results of quadrotor stabilization control", shown "to show the ability of
+    the controllers in controlling the angles", whose "sharp peaks" mark the shocks; Fig. 15 "the
+    controllers' response" to masses placed "to create uncertainties around the roll and pitch
+    axis"; the paper shows the motors' commands only in Fig. 18 ("control input signals (thrust
+    of each motor)"). The shocks and the masses act on roll and pitch.
+    """
+    err = np.degrees(np.asarray(euler_rad, dtype=float)[:, :2] - np.asarray(euler_des_rad, dtype=float)[:, :2])
+    return hf_rms(t, err, cutoff_hz)
+
+
 def divergence_time(t, euler_rad, limit_deg: float = DIVERGENCE_DEG) -> float | None:
     """First time |phi| or |theta| exceeds ``limit_deg`` (or the state is not finite); None if never."""
     t = np.asarray(t, dtype=float)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_tools.reproduce import paper_data
-from gcs_tools.reproduce.experiment import NOT_REPRODUCED, PARTLY, REPRODUCED, fmt, table
+from gcs_tools.reproduce.experiment import NOT_REPRODUCED, PARTLY, REPRODUCED, fmt, status_letter, table
 from gcs_tools.reproduce.paper_data import CLAIMS
 from protocol.mean_error import COLUMNS
 
@@ -140,7 +140,7 @@ def plants_markdown(columns: list, n_seeds: int) -> str:
                 cells.append("-")
                 continue
             overall, per = v[claim]
-            short = "".join({REPRODUCED: "y", PARTLY: "p"}.get(s, "n") for s in per)
+            short = "".join(status_letter(s) for s in per)
             cells.append(f"**{_STATUS_SHORT.get(overall, overall)}** [{short}]")
         rows.append([f"{text} ({where})", *cells])
     lines.append(table(["claim of the paper", *heads], rows))

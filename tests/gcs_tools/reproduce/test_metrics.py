@@ -8,6 +8,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from gcs_tools.reproduce.metrics import (divergence_time, hf_rms, improvement_pct, low_part, mean_lag, overshoot_pct,
+                                         tilt_chattering_deg,
                                          settling_about_final, settling_time, shock_response, window_mean_abs)
 
 DT = 0.002
@@ -121,6 +122,21 @@ def test_hf_rms_averages_the_power_of_columns_and_needs_uniform_samples():
     with pytest.raises(ValueError, match="uniform"):
         hf_rms(np.r_[t[:500], t[500:] + 0.01], x, 5.0)
     assert math.isnan(hf_rms(t[:3], x[:3], 5.0))
+
+
+def test_tilt_chattering_reads_the_roll_and_pitch_errors_in_degrees():
+    """Figs. 12 and 15's chattering: the roll and pitch errors above the cut-off, in degrees; the
+    yaw error, slow motion and a reference the attitude follows do not count."""
+    t = np.arange(0.0, 10.0, 0.002)
+    slow = np.radians(5.0) * np.sin(2 * math.pi * 0.5 * t)
+    euler_des = np.column_stack([slow, -slow, np.zeros_like(t)])
+    roll = slow + np.radians(0.3 * math.sqrt(2.0)) * np.sin(2 * math.pi * 7.0 * t)  # 0.3 deg rms at 7 Hz
+    pitch = -slow + np.radians(0.4 * math.sqrt(2.0)) * np.sin(2 * math.pi * 11.0 * t)  # 0.4 deg rms at 11 Hz
+    yaw = np.radians(2.0) * np.sin(2 * math.pi * 20.0 * t)
+    euler = np.column_stack([roll, pitch, yaw])
+    got = tilt_chattering_deg(t, euler, euler_des, 5.0)
+    assert got == pytest.approx(math.sqrt((0.3 ** 2 + 0.4 ** 2) / 2.0), rel=1e-6)
+    assert tilt_chattering_deg(t, euler_des, euler_des, 5.0) == pytest.approx(0.0, abs=1e-12)
 
 
 def test_divergence_window_and_lag_helpers():
