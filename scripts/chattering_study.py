@@ -1,19 +1,20 @@
 """Where the FLC's chattering on ``hilms`` comes from (Fig. 12's "FLC eliminates the chattering SMC
-shows in hover with shocks"; docs/REPRODUCTION.md, "The FLC's chattering on the hardware rig").
+shows in hover with shocks"; docs/REPRODUCTION.md, "The chattering verdicts read the angles; the FLC's
+chattering on the hardware rig").
 
     python scripts/chattering_study.py [--seeds 3] [--workers 2]
     python scripts/chattering_study.py --delay-scan [--seeds 3] [--workers 2]
 
-Runs the reproduction's ``hover-shocks`` job (SMC and FLC, 20 s, 500 Hz log) on three kinds of plant:
+Runs the reproduction's ``hover-shocks`` job (SMC and FLC, 20 s, 500 Hz log) on four kinds of plant:
 ``hilms-ideal``; ``hilms-ideal`` plus one effect (or reading) of ``hilms``; ``hilms`` minus one (that
-key set back to its ``hilms-ideal`` value); ``hilms-ideal`` with the effects of :data:`CUMULATIVE` added
-one after another. The effects are the keys on which the two airframes
-differ (``load_config``), the SMC's two Eq. 41 readings taken together, and the heading reading
-together with the motors' field it reads. Per plant: both controllers' chattering as
-``rig-gcs reproduce`` measures it (``exp_shocks.summarise``: RMS above 5 Hz of the roll and pitch
-errors, what Fig. 12 plots, and of the four motor voltage commands), mean over the seeds, the FLC /
-SMC ratios and the claim's verdict per seed (``exp_shocks``' own: y, p, n). Last, for ``hilms``, where the FLC's torque commands above 5 Hz sit in
-frequency (share of their power per band, per axis).
+key set back to its ``hilms-ideal`` value); ``hilms-ideal`` with the effects of :data:`CUMULATIVE`
+added one after another. The effects are the keys on which the two airframes differ
+(``load_config``), the SMC's two Eq. 41 readings taken together, and the heading reading together
+with the motors' field it reads. Per plant: both controllers' chattering as ``rig-gcs reproduce``
+measures it (``exp_shocks.summarise``: RMS above 5 Hz of the roll and pitch errors, what Fig. 12
+plots, and of the four motor voltage commands), mean over the seeds, the FLC / SMC ratios and the
+claim's verdict per seed (``exp_shocks``' own: y, p, n). Last, for ``hilms``, where the FLC's torque
+commands above 5 Hz sit in frequency (share of their power per band, per axis).
 
 ``--delay-scan``: both controllers' chattering on ``hilms-ideal`` with the SMC readings of ``hilms``,
 per sensing-to-actuation delay in :data:`DELAYS_S`, with Eq. 40's line and with ``hilms``'s convex
@@ -130,7 +131,8 @@ def main() -> None:
     if not spectra:
         return
 
-    print(f"\nhilms, FLC: share of the torque commands' power above {BANDS_HZ[0][0]:g} Hz per band, mean over the seeds")
+    print(f"\nhilms, FLC: share of the torque commands' power above {BANDS_HZ[0][0]:g} Hz per band, "
+          "mean over the seeds")
     print(f"{'axis':6s} " + " ".join(f"{lo:g}-{hi:g} Hz".rjust(11) for lo, hi in BANDS_HZ))
     for k, axis in ((1, "roll"), (2, "pitch"), (3, "yaw")):
         shares = np.mean([band_shares(r.series["t"], r.series["u"][:, k]) for r in results[len(jobs):]], axis=0)

@@ -159,6 +159,8 @@ def _settle(seconds: float) -> str:
 
 
 def chattering_verdict(smc, flc) -> Verdict:
+    """Fig. 12's "FLC eliminates the chattering" from two runs' :func:`summarise`: the FLC's roll and
+    pitch chattering under half the SMC's (under it: partly)."""
     a, b = smc["chattering_deg_rms"], flc["chattering_deg_rms"]
     status = REPRODUCED if b < 0.5 * a else (PARTLY if b < a else NOT_REPRODUCED)
     return Verdict("flc_no_chattering", status,
