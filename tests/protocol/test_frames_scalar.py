@@ -11,9 +11,6 @@ from protocol import frames as F
 from tests.float_bits import bits, same_or_within_ulps
 
 
-
-
-
 def _quaternions():
     rng = np.random.default_rng(14)
     out = [tuple(q / np.linalg.norm(q)) for q in rng.normal(size=(3000, 4))]
