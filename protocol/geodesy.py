@@ -95,8 +95,9 @@ def ecef_to_geodetic(ecef):
 
 def ecef_to_geodetic_xyz(x: float, y: float, z: float) -> tuple[float, float, float]:
     """:func:`ecef_to_geodetic` of one ECEF point given as three floats, in scalar math: the
-    same operations in the same order, bit-identical (``math`` and numpy call the same libm
-    functions for these; the horizontal distance stays numpy's ``hypot``, which Python's
+    same operations in the same order, bit-identical where numpy's ``arctan2`` is libm's (hosts
+    without AVX-512; with it numpy runs its own SIMD kernel and the two differ by an ulp or two,
+    docs/CONVENTIONS.md; the horizontal distance stays numpy's ``hypot``, which Python's
     ``math.hypot`` does not always match to the last bit; a test compares the two), about
     15x faster than numpy on 0-d arrays (the served rig converts positions for several
     messages a simulated second)."""
@@ -152,7 +153,7 @@ def global_to_local_ned(home: Home, lat_deg, lon_deg, alt_m) -> np.ndarray:
 
 class TangentPlane:
     """:func:`local_enu_to_global` for one home, one point at a time, in plain floats, bit for
-    bit: the home's frame computed once; ``origin + enu @ r`` summed as numpy's vector-matrix
+    bit where :func:`ecef_to_geodetic_xyz` is: the home's frame computed once; ``origin + enu @ r`` summed as numpy's vector-matrix
     product does (the products in order from +0), then :func:`ecef_to_geodetic_xyz`. A few
     microseconds instead of tens: for messages sent every simulation step or chunk."""
 

@@ -14,6 +14,8 @@ import struct
 
 import numpy as np
 
+from protocol.geodesy import WGS84_A_M
+
 
 def _numpy_is_libm() -> bool:
     rng = np.random.default_rng(0)
@@ -52,3 +54,10 @@ def same_or_within_ulps(got, want, ulps: int = 4, scale: float | None = None) ->
     if NUMPY_IS_LIBM:
         return bits(got) == bits(want)
     return within_ulps(got, want, ulps, scale)
+
+
+def same_geodetic(got, want) -> bool:
+    """(lat_deg, lon_deg, alt_m) triples by :func:`same_or_within_ulps`: the angles in ulps of
+    themselves, the height in ulps of the Earth's radius (the size of the terms it is the
+    difference of)."""
+    return same_or_within_ulps(got[:2], want[:2]) and same_or_within_ulps(got[2:], want[2:], scale=WGS84_A_M)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from protocol import geodesy as geo
-from tests.float_bits import same_or_within_ulps
+from tests.float_bits import same_geodetic
 
 homes = st.builds(
     geo.Home,
@@ -199,12 +199,7 @@ def test_scalar_ecef_to_geodetic_matches_numpy(home, enu):
     terms it is the difference of)."""
     ecef = geo.geodetic_to_ecef(home.lat_deg, home.lon_deg, home.alt_m) + np.asarray(enu) @ geo.ecef_to_enu_rotation(
         home.lat_deg, home.lon_deg)
-    assert _same_geodetic(geo.ecef_to_geodetic_xyz(*ecef.tolist()), geo.ecef_to_geodetic(ecef))
-
-
-def _same_geodetic(got, want) -> bool:
-    return (same_or_within_ulps(got[:2], want[:2])
-            and same_or_within_ulps(got[2:], want[2:], scale=geo.WGS84_A_M))
+    assert same_geodetic(geo.ecef_to_geodetic_xyz(*ecef.tolist()), geo.ecef_to_geodetic(ecef))
 
 
 def test_scalar_ecef_to_geodetic_matches_numpy_on_many_points():
@@ -214,4 +209,4 @@ def test_scalar_ecef_to_geodetic_matches_numpy_on_many_points():
         r = geo.ecef_to_enu_rotation(home.lat_deg, home.lon_deg)
         for _ in range(3000):
             ecef = origin + rng.normal(0.0, 10.0 ** float(rng.integers(-2, 5)), 3) @ r
-            assert _same_geodetic(geo.ecef_to_geodetic_xyz(*ecef.tolist()), geo.ecef_to_geodetic(ecef))
+            assert same_geodetic(geo.ecef_to_geodetic_xyz(*ecef.tolist()), geo.ecef_to_geodetic(ecef))

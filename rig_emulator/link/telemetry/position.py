@@ -34,8 +34,9 @@ _plane = functools.lru_cache(maxsize=8)(TangentPlane)  # the home's frame, compu
 
 
 def enu_to_global(home, enu):
-    """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, bit-identical
-    (:class:`protocol.geodesy.TangentPlane`; tests/rig_emulator/link/telemetry/test_position_geodesy.py)."""
+    """:func:`protocol.geodesy.local_enu_to_global` of one ENU offset, bit-identical where numpy's
+    arctan2 is libm's (:class:`protocol.geodesy.TangentPlane`; within a few ulps elsewhere:
+    tests/rig_emulator/link/telemetry/test_position_geodesy.py)."""
     e, n, u = enu
     return _plane(home).to_global(float(e), float(n), float(u))
 
