@@ -9,6 +9,11 @@ waypoint, and switches to the next waypoint when the vehicle's reported position
 ``waypoint_reached``). Time is the vehicle's clock (``time_boot_ms`` of LOCAL_POSITION_NED),
 so the run is the same at any speed-up of the rig. One set-point goes out per position
 report; the vehicle holds the last one between reports.
+
+As PX4 asks, the stream comes first: the tool sends a set-point at the vehicle's position,
+then switches the vehicle to OFFBOARD (:func:`start_offboard`); set-points alone never
+change a PX4 vehicle's mode. It sends the ground station's HEARTBEAT at 1 Hz throughout
+(:mod:`gcs_tools.link`).
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ POSITION_ONLY = (M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMA
 DEFAULT_SPEED = 0.5  # m/s, the rig's guidance.speed
 DEFAULT_MIN_LEG_TIME = 1.0  # s, the rig's guidance.min_leg_time
 DEFAULT_POSITION_HZ = 20.0
+PX4_OFFBOARD = 6  # PX4's main mode OFFBOARD (custom_mode = 6 << 16)
 
 
 @dataclass(frozen=True)
@@ -50,6 +56,20 @@ def send_target(link: Link, t_ms: int, enu) -> None:
     link.mav.set_position_target_local_ned_send(t_ms, link.target_system, link.target_component,
                                                 M.MAV_FRAME_LOCAL_NED, POSITION_ONLY, n, e, d,
                                                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def start_offboard(link: Link, send_setpoint, attempts: int = 3) -> None:
+    """Switch the vehicle to OFFBOARD (DO_SET_MODE with PX4's custom mode 6) right after a
+    set-point from ``send_setpoint()``: PX4 enters OFFBOARD only while a set-point stream is
+    flowing. A refusal is retried with a new set-point; OperationError after ``attempts``."""
+    result = None
+    for _ in range(attempts):
+        send_setpoint()
+        result = link.command(M.MAV_CMD_DO_SET_MODE, float(M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), float(PX4_OFFBOARD))
+        if result == M.MAV_RESULT_ACCEPTED:
+            return
+    name = M.enums["MAV_RESULT"][result].name if result in M.enums["MAV_RESULT"] else str(result)
+    raise OperationError(f"the vehicle refused OFFBOARD ({name}) with a set-point stream flowing")
 
 
 def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_time: float = DEFAULT_MIN_LEG_TIME,
@@ -76,6 +96,8 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
     reached: list[Reached] = []
     sp_pos, sp_vel = np.zeros(3), np.zeros(3)
     pos, t = _position(msg), msg.time_boot_ms * 1e-3
+    hold = pos.copy()
+    start_offboard(link, lambda: send_target(link, int(t * 1e3), hold))
     for i, (target, radius) in enumerate(zip(pts, radii)):
         start, t0 = pos.copy(), t
         duration = leg_duration(*start, *target, speed, min_leg_time)

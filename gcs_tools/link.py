@@ -3,6 +3,13 @@
 Connections are mavutil connection strings (``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``,
 ``udpout:host:port``, ``/dev/ttyUSB0``, ...), opened in the hilms dialect over MAVLink 2 as
 ground station (system 255, component MAV_COMP_ID_MISSIONPLANNER by default).
+
+A link is a ground station's: it sends HEARTBEAT (MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID) once
+every :data:`HEARTBEAT_PERIOD_S`, as every ground station does, so a vehicle's data-link-loss
+failsafe (PX4's COM_DL_LOSS_T, the rig's ``failsafe.gcs_timeout``) never sees a scripted tool
+as a lost ground station. The heartbeat goes out from the tool's own receive loop
+(:meth:`Link.recv`, :meth:`Link.heartbeat_if_due` for loops that read the connection
+themselves), whose waits are at most :data:`RECV_SLICE_S`: no thread shares the connection.
 """
 
 from __future__ import annotations
@@ -20,7 +27,11 @@ GCS_COMPID = M.MAV_COMP_ID_MISSIONPLANNER
 HEARTBEAT_TIMEOUT_S = 10.0
 COMMAND_TIMEOUT_S = 1.5
 COMMAND_RETRIES = 3
+HEARTBEAT_PERIOD_S = 1.0  # a ground station's HEARTBEAT rate (1 Hz)
+RECV_SLICE_S = 0.25  # the longest single wait of a receive loop, so the heartbeat keeps its rate
 NAN = math.nan
+#: the clock the heartbeat period is judged on (wall time; a test may drive it)
+heartbeat_clock = time.monotonic
 
 
 class Link:
@@ -43,6 +54,8 @@ class Link:
         self.target_component = M.MAV_COMP_ID_AUTOPILOT1
         self.last_heartbeat = None
         self.stale_acks = StaleAcks()
+        self.heartbeats_sent = 0
+        self._next_heartbeat = -math.inf
 
     @property
     def mav(self):
@@ -57,15 +70,29 @@ class Link:
     def __exit__(self, *exc):
         self.close()
 
+    def heartbeat_if_due(self) -> None:
+        """Send the ground station's HEARTBEAT when :data:`HEARTBEAT_PERIOD_S` has passed since the last."""
+        now = heartbeat_clock()
+        if now < self._next_heartbeat:
+            return
+        self._next_heartbeat = max(self._next_heartbeat + HEARTBEAT_PERIOD_S, now)
+        try:
+            self.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, M.MAV_STATE_ACTIVE)
+        except OSError as exc:
+            raise OperationError(f"link {self.url} lost: {exc}") from None
+        self.heartbeats_sent += 1
+
     def recv(self, types=None, timeout: float = 1.0, condition=None):
-        """The next message of ``types`` from the vehicle satisfying ``condition`` (None on timeout)."""
+        """The next message of ``types`` from the vehicle satisfying ``condition`` (None on timeout);
+        the ground station's HEARTBEAT goes out meanwhile when due."""
         deadline = time.monotonic() + timeout
         while True:
+            self.heartbeat_if_due()
             left = deadline - time.monotonic()
             if left <= 0:
                 return None
             try:
-                msg = self.conn.recv_match(type=types, blocking=True, timeout=min(left, 0.25))
+                msg = self.conn.recv_match(type=types, blocking=True, timeout=min(left, RECV_SLICE_S))
             except OSError as exc:
                 raise OperationError(f"link {self.url} lost: {exc}") from None
             if msg is None:
@@ -85,9 +112,8 @@ class Link:
 
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            # A ground station's HEARTBEAT, once a second: a vehicle serving UDP (udpin) learns of a
-            # ground station only from what it sends.
-            self.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, M.MAV_STATE_ACTIVE)
+            # recv sends the ground station's HEARTBEAT: a vehicle serving UDP (udpin) learns of a
+            # ground station only from what it sends
             msg = self.recv("HEARTBEAT", min(1.0, deadline - time.monotonic()))
             if msg is not None and is_vehicle(msg) and msg.system_status == M.MAV_STATE_BOOT:
                 # a starting vehicle (the rig compiling its step loop: minutes on a cold cache) answers

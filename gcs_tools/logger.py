@@ -129,6 +129,7 @@ class Recorder:
                 if t_end is not None and now >= t_end:
                     break
                 wait = 0.2 if t_end is None else max(min(0.2, t_end - now), 0.0)
+                self.link.heartbeat_if_due()  # a ground station's HEARTBEAT at 1 Hz (gcs_tools.link)
                 try:
                     msg = conn.recv_match(blocking=True, timeout=wait)
                 except OSError as exc:

@@ -70,7 +70,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from protocol.dialect import mavlink as M
-from protocol.geodesy import Home, global_to_local_enu, local_enu_to_global
+from protocol.geodesy import Home, global_to_local_enu, local_enu_to_global, surface_offset
 from protocol.frames import enu_to_ned, ned_to_enu
 
 GLOBAL_FRAMES = frozenset({M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_INT})
@@ -238,6 +238,9 @@ class MissionPlan:
     count: int  # items in the mission (including non-navigation items and a home item 0)
     first_seq: int  # first item that is flown (1 with the ArduPilot item-0 convention)
     lands: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (N,) 1 = a landing leg (NAV_LAND)
+    #: (N,) horizontal distance from home of each waypoint (m; along the ellipsoid for a global
+    #: item, NaN where the leg keeps the X/Y the rig has): what the fence check measures
+    horizontal_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
     return_seq: int = -1  # a NAV_RETURN_TO_LAUNCH item ends the legs: the rig returns (AUTO.RTL); -1 none
 
     @property
@@ -260,15 +263,37 @@ def _takeoff_up(item: MissionItem, home: Home | None) -> float:
     return item.z  # relative altitude, LOCAL_ENU up
 
 
-def item_position_enu(item: MissionItem, home: Home) -> np.ndarray:
-    """World ENU (m) about ``home`` of a position item (x, y taken as given)."""
+def item_height(item: MissionItem, home: Home) -> float:
+    """The item's altitude as its frame means it, as a height above home (m): GLOBAL above mean
+    sea level (home's altitude subtracted), GLOBAL_RELATIVE_ALT above home, LOCAL_NED -z,
+    LOCAL_ENU z. The rig's world is flat about home (its virtual ground is level), so this is
+    the height it flies, wherever the item lies on the Earth."""
     if item.frame in GLOBAL_FRAMES:
-        return np.asarray(global_to_local_enu(home, item.x, item.y, item.z), dtype=float)
-    if item.frame in RELATIVE_FRAMES:
-        return np.asarray(global_to_local_enu(home, item.x, item.y, home.alt_m + item.z), dtype=float)
+        return float(item.z) - home.alt_m
     if item.frame == M.MAV_FRAME_LOCAL_NED:
-        return ned_to_enu([item.x, item.y, item.z])
-    return np.array([item.x, item.y, item.z], dtype=float)
+        return -float(item.z)
+    return float(item.z)
+
+
+def item_position_enu(item: MissionItem, home: Home) -> np.ndarray:
+    """World ENU (m) about ``home`` of a position item (x, y taken as given): east and north on
+    the tangent plane at home, up the item's height by its frame (:func:`item_height`), not the
+    tangent plane's, which would read the Earth's curvature as depth (196 m at 50 km)."""
+    up = item_height(item, home)
+    if item.frame in GLOBAL_FRAMES or item.frame in RELATIVE_FRAMES:
+        enu = global_to_local_enu(home, item.x, item.y, home.alt_m + up)
+        return np.array([enu[0], enu[1], up], dtype=float)
+    if item.frame == M.MAV_FRAME_LOCAL_NED:
+        return np.array([item.y, item.x, up], dtype=float)
+    return np.array([item.x, item.y, up], dtype=float)
+
+
+def item_horizontal_m(item: MissionItem, home: Home, pos_enu) -> float:
+    """Horizontal distance (m) of a position item from home: along the ellipsoid for a global
+    item (:func:`protocol.geodesy.surface_offset`), on the local plane for a local one."""
+    if item.frame in GLOBAL_FRAMES or item.frame in RELATIVE_FRAMES:
+        return surface_offset(home, item.x, item.y)[0]
+    return math.hypot(float(pos_enu[0]), float(pos_enu[1]))
 
 
 def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
@@ -282,7 +307,7 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
         if result != M.MAV_MISSION_ACCEPTED:
             raise ValueError(reason)
     first = 1 if item0_home else 0
-    wps, radii, holds, speeds, free, seqs, lands = [], [], [], [], [], [], []
+    wps, radii, holds, speeds, free, seqs, lands, horiz = [], [], [], [], [], [], [], []
     speed = 0.0
     return_seq = -1
     jumps_left: dict[int, int] = {}
@@ -311,6 +336,7 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
             return_seq = item.seq
             break
         radius, hold, free_xy, land = 0.0, 0.0, 0.0, 0.0
+        from_item = item.command in (M.MAV_CMD_NAV_WAYPOINT, M.MAV_CMD_NAV_LOITER_TIME, M.MAV_CMD_NAV_LAND)
         if item.command == M.MAV_CMD_NAV_WAYPOINT:
             pos = item_position_enu(item, home)
             hold = 0.0 if math.isnan(item.param1) else item.param1
@@ -337,6 +363,7 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
             land = 1.0
         if not np.all(np.isfinite(pos)):
             raise ValueError(f"item {item.seq}: position is not finite in the local frame")
+        horiz.append(item_horizontal_m(item, home, pos) if from_item and not free_xy else math.nan)
         wps.append(pos)
         radii.append(radius)
         holds.append(hold)
@@ -350,7 +377,8 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
     return MissionPlan(waypoints=np.asarray(wps, dtype=float).reshape(n, 3), radii=np.asarray(radii, dtype=float),
                        holds=np.asarray(holds, dtype=float), speeds=np.asarray(speeds, dtype=float),
                        free_xy=np.asarray(free, dtype=float), seqs=tuple(seqs), count=len(items), first_seq=first,
-                       lands=np.asarray(lands, dtype=float), return_seq=return_seq)
+                       lands=np.asarray(lands, dtype=float), return_seq=return_seq,
+                       horizontal_m=np.asarray(horiz, dtype=float))
 
 
 # --- the rig's mission -> items (ground tools, tests) ----------------------------------------------
@@ -381,9 +409,9 @@ def waypoint_items(waypoints_enu, home: Home, frame: int = M.MAV_FRAME_GLOBAL_RE
             x, y, z = p if frame == M.MAV_FRAME_LOCAL_ENU else enu_to_ned(p)
             x, y = round(float(x) * LOCAL_SCALE) / LOCAL_SCALE, round(float(y) * LOCAL_SCALE) / LOCAL_SCALE
         else:
-            lat, lon, alt = local_enu_to_global(home, p)
+            lat, lon, _alt = local_enu_to_global(home, p)
             x, y = round(lat * GLOBAL_SCALE) / GLOBAL_SCALE, round(lon * GLOBAL_SCALE) / GLOBAL_SCALE
-            z = alt - home.alt_m if frame in RELATIVE_FRAMES else alt
+            z = p[2] if frame in RELATIVE_FRAMES else p[2] + home.alt_m  # the frame's altitude (item_height)
         items.append(MissionItem(seq=seq, frame=frame, command=M.MAV_CMD_NAV_WAYPOINT, param1=_f32(hold_s),
                                  param2=_f32(radius_m), x=float(x), y=float(y), z=_f32(z)))
         seq += 1

@@ -176,6 +176,7 @@ def _record(link: Link, duration_s: float, alive=lambda: True):
         if time.monotonic() > deadline:
             raise OperationError(f"rectangle: the rig did not fly {duration_s:g} simulated seconds in "
                                  f"{WALL_TIMEOUT_S:g} s")
+        link.heartbeat_if_due()
         msg = link.conn.recv_match(blocking=False)
         if msg is None:
             if not alive():

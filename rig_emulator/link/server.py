@@ -48,7 +48,8 @@ from rig_emulator.link.ftp.server import FileStore, FtpServer, reply_message
 from rig_emulator.link.telemetry.ideal_sensors import load_sensor_model
 from rig_emulator.link.mission.executor import MissionExecutor
 from rig_emulator.link.mission.transfer import MissionTransfer
-from rig_emulator.link.commands.modes import FlightModes
+from rig_emulator.link.commands import flight_commands
+from rig_emulator.link.commands.modes import FlightModes, split_custom_mode
 from rig_emulator.link.commands.offboard_setpoints import OffboardSetpoints
 from rig_emulator.link.parameters.service import ParamService
 from rig_emulator.link.parameters.table import ParamTable
@@ -129,6 +130,7 @@ class RigServer:
             "PARAM_SET": self.params.set,
             "COMMAND_LONG": lambda msg, ch: self._command(Command.from_long(msg), ch),
             "COMMAND_INT": lambda msg, ch: self._command(Command.from_int(msg), ch),
+            "SET_MODE": self._set_mode_message,
             "REQUEST_DATA_STREAM": self._request_data_stream,
             **self.offboard.handlers(),  # SET_POSITION_TARGET_*, SET_ATTITUDE_TARGET, SET_ACTUATOR_CONTROL_TARGET
             "TIMESYNC": self._timesync,
@@ -175,6 +177,22 @@ class RigServer:
             self.console.statustext(self.rig.time_s, severity, text)
         for msg in self.statustext_messages(severity, text):
             self.broadcast(msg) if channel is None else channel.send(msg)
+
+    def send_follow(self, channel: Channel, follow: list) -> None:
+        """The messages that follow an answer to ``channel``: STATUSTEXT (a refusal's reason, a
+        warning) to every peer and the console, as flight stacks log them; the rest (requested
+        messages) to ``channel`` alone. In order, after the answer itself."""
+        parts: list[bytes] = []
+        for msg in follow:
+            if msg.get_type() != "STATUSTEXT":
+                channel.send(msg)
+                continue
+            self.broadcast(msg)
+            text = msg.text if isinstance(msg.text, bytes) else str(msg.text).encode("ascii", "replace")
+            parts.append(text.rstrip(b"\0"))
+            if len(text) < STATUSTEXT_LEN or not msg.id:  # the last chunk of the text
+                self.console.statustext(self.rig.time_s, msg.severity, b"".join(parts).decode("ascii", "replace"))
+                parts = []
 
     def event(self, text: str) -> None:
         """An event of the flight (take-off, landing, return...): STATUSTEXT INFO to every peer and the console."""
@@ -267,10 +285,28 @@ class RigServer:
         channel.send(M.MAVLink_command_ack_message(
             command=cmd.command, result=result, progress=0, result_param2=0,
             target_system=0, target_component=0))
-        for msg in follow:
-            channel.send(msg)
+        self.send_follow(channel, follow)
         if self.reboot_pending:
             self.reboot()
+        if self.heartbeat_pending:
+            self.heartbeat_pending = False
+            self.broadcast_heartbeat()
+
+    def _set_mode_message(self, msg, channel: Channel) -> None:
+        """The legacy SET_MODE message (base_mode with MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, PX4's
+        custom_mode): DO_SET_MODE's outcome, answered as PX4 does with a COMMAND_ACK for
+        MAV_CMD_DO_SET_MODE."""
+        if not int(msg.base_mode) & M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+            result, follow = M.MAV_RESULT_DENIED, self.statustext_messages(
+                M.MAV_SEVERITY_WARNING, "mode refused: SET_MODE needs MAV_MODE_FLAG_CUSTOM_MODE_ENABLED and PX4's "
+                                        "custom_mode")
+        else:
+            main, sub = split_custom_mode(int(msg.custom_mode))
+            result, follow = flight_commands.set_mode(self, main, sub)
+        self._snap = None
+        channel.send(M.MAVLink_command_ack_message(command=M.MAV_CMD_DO_SET_MODE, result=result, progress=0,
+                                                  result_param2=0, target_system=0, target_component=0))
+        self.send_follow(channel, follow)
         if self.heartbeat_pending:
             self.heartbeat_pending = False
             self.broadcast_heartbeat()

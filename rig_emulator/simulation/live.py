@@ -555,10 +555,11 @@ class LiveRig:
         return ofb
 
     def _current_heading(self) -> float:
-        """psi to turn from or hold: the live offboard reference when one is flown, else the attitude."""
+        """psi to turn from or hold: the live offboard reference when one is flown, else the
+        heading the controllers fly (:meth:`heading_now`)."""
         if self.sim.gp.gtype == OFFBOARD and self.sim.gp.offboard[OFB_KIND] == OFB_KIND_POSITION:
             return float(self.sim.ref[REF_YAW])
-        return float(self.snapshot().euler[2])
+        return self.heading_now()
 
     def set_offboard_setpoint(self, position=None, velocity=None, acceleration=None,
                               yaw: float | None = None, yaw_rate: float | None = None) -> None:
@@ -634,17 +635,34 @@ class LiveRig:
         self._path_kind = "mission"
         if not (keep_reached and self.sim.reached_t.shape[0] == wp.shape[0]):
             self.sim.reached_t = np.full(wp.shape[0], np.nan)
-        start_at(index, self.sim.time, self.sim.x[0:3].copy(), self.sim.gp, self.sim.gstate)
+        start_at(index, self.sim.time, self.position_now(), self.sim.gp, self.sim.gstate)
 
     def hold_position(self) -> None:
-        """Pause: hold the current position (e.g. a mission pause)."""
-        self.set_position_target(self.sim.x[0:3].copy())
+        """Hold where the vehicle is (:meth:`pose_now`: position and heading), e.g. a hold, a
+        mission pause or a failsafe hold."""
+        position, heading = self.pose_now()
+        self.set_position_target(position, yaw=heading)
+
+    def pose_now(self) -> tuple[np.ndarray, float]:
+        """Where the vehicle is, as its controllers fly it: the position (world ENU, m) and the
+        heading (paper psi, rad) of the onboard estimate with the sensor models on, else of the
+        physics. Every set-point made from "where the vehicle is" (holds, take-off, landing,
+        return, a mission's start, a set-point relative to the vehicle) starts from this, never
+        from the physics state: the controllers close their loops on the estimate, so a target
+        made from the truth is wherever the two have parted to (metres within a minute)."""
+        sp, ss = self.sim.sensing.params, self.sim.sensing.state
+        if sp.estimated:
+            return ss.onboard[0:3].copy(), float(ss.att_est[2])
+        x = self.sim.x
+        return x[0:3].copy(), float(euler_from_quat(x[6], x[7], x[8], x[9])[2])
 
     def position_now(self) -> np.ndarray:
-        """The position the controllers fly on now (the onboard estimate with the sensor
-        models on, else the physics), world ENU (m)."""
-        sp, ss = self.sim.sensing.params, self.sim.sensing.state
-        return (ss.onboard[0:3] if sp.estimated else self.sim.x[0:3]).copy()
+        """The position of :meth:`pose_now`, world ENU (m)."""
+        return self.pose_now()[0]
+
+    def heading_now(self) -> float:
+        """The heading of :meth:`pose_now`, paper psi (rad)."""
+        return self.pose_now()[1]
 
     def fly_path(self, waypoints, speeds=None, free_xy=None, holds=None) -> None:
         """Fly a guidance path (take-off, landing, return, fly-to) on Sec. 4-4 virtual lines

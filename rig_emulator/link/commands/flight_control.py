@@ -59,8 +59,7 @@ class FlightControl:
 
     def _stabilized(self, rig) -> None:
         self.tasks.cancel()
-        psi = rig.snapshot().euler[2]
-        rig.set_attitude_target(0.0, 0.0, psi)
+        rig.set_attitude_target(0.0, 0.0, rig.heading_now())
 
     def _takeoff_mode(self, rig) -> None:
         self.takeoff(None)

@@ -7,9 +7,14 @@
   (AUTO.RTL) or ``terminate`` (motors off, disarm).
 * Geofence (FENCE_ENABLE, FENCE_RADIUS, FENCE_ALT_MAX, FENCE_ALT_MIN, FENCE_ACTION in PX4's
   GF_ACTION codes): checked at :data:`FENCE_PERIOD_S` of simulated time on the position the
-  rig reports, while armed. Going out is a breach, reported once with a STATUSTEXT and
-  FENCE_STATUS (breach count, type, time) and acted on: ``none``, ``warning`` (report
-  only), ``hold``, ``return``, ``terminate``, ``land``. Coming back inside clears it.
+  rig reports (the position its controllers fly). Going out is a breach: counted
+  (FENCE_STATUS.breach_count, one per time out), reported once with a STATUSTEXT and
+  FENCE_STATUS (breach status, count, type, time) and, armed, acted on: ``none``,
+  ``warning`` (report only), ``hold``, ``return``, ``terminate``, ``land``. The action's
+  mode stands until a mode command overrides it (as PX4 lets the operator take over) or
+  the vehicle is back inside: set-points never change the mode
+  (:mod:`rig_emulator.link.commands.offboard_setpoints`). Being inside again, whether armed
+  or not, clears the breach ("fence: back inside" and FENCE_STATUS).
 
 A mode the rig does not provide (AUTO.LAND, AUTO.RTL before they exist) falls back to
 holding the position, and the STATUSTEXT says so. Each action is one readable line to
@@ -99,14 +104,15 @@ class FenceMonitor:
         self._next_s = now + FENCE_PERIOD_S
         cfg = srv.rig.cfg
         snap = srv.snapshot()
-        limits = mission_limits(cfg)
-        why = fence_breach(snap.position, limits) if snap.armed else None
+        why = fence_breach(snap.position, mission_limits(cfg))
         if why is None:
             if self.breached is not None:
                 self.breached = None
                 srv.statustext(None, M.MAV_SEVERITY_INFO, "fence: back inside")
+                srv.broadcast(self.status_message())
             return
         if self.breached is not None:
+            self.breached = why  # still outside: the action taken stands until a mode command or back inside
             return
         self.breached = why
         self.breach_count = (self.breach_count + 1) % 65536
@@ -114,7 +120,10 @@ class FenceMonitor:
         self.breach_type = (M.FENCE_BREACH_BOUNDARY if "radius" in why else
                             M.FENCE_BREACH_MAXALT if "above" in why else M.FENCE_BREACH_MINALT)
         action = cfg["fence.action"]
-        done = "no action" if action in ("none", "warning") else take_action(srv, action)
+        if not snap.armed:
+            action, done = "none", "disarmed"
+        else:
+            done = "no action" if action in ("none", "warning") else take_action(srv, action)
         srv.statustext(None, M.MAV_SEVERITY_CRITICAL, f"fence breach: {why}; {action} ({done})")
         srv.broadcast(self.status_message())
         _flush_heartbeat(srv)

@@ -9,7 +9,8 @@ FOLLOW_TARGET 8, PRECLAND 9).
 
 Every PX4 mode is in :data:`MODES`. The ones the rig flies have a handler ``enter(rig)``
 registered (:mod:`rig_emulator.link.commands.flight_control`, :mod:`rig_emulator.link.mission.executor`,
-the offboard handler); the others carry the reason the rig refuses them
+:mod:`rig_emulator.link.commands.offboard_setpoints`: OFFBOARD only with a fresh set-point
+stream); the others carry the reason the rig refuses them
 (:meth:`FlightModes.refusal`), which the link sends as a STATUSTEXT after a DENIED ACK. A
 handler that returns ``False`` or a reason (str) refuses the mode (the mode does not
 change; the reason is kept in :attr:`FlightModes.last_refusal`).
@@ -77,10 +78,6 @@ def split_custom_mode(value: int) -> tuple[int, int]:
     return (value >> 16) & 0xFF, (value >> 24) & 0xFF
 
 
-def _keep_target(rig) -> None:
-    """OFFBOARD: the set-point messages steer; entering changes nothing."""
-
-
 class FlightModes:
     """The current mode and the handlers that put the rig into each mode."""
 
@@ -89,7 +86,6 @@ class FlightModes:
         self._enter: dict[tuple[int, int], Callable] = {}
         self.on_leave: Callable | None = None  # (old, new) after every change of mode
         self.last_refusal = ""  # why the last enter() was refused by its handler
-        self.register(OFFBOARD, 0, _keep_target)
 
     def register(self, main: int, sub: int, enter: Callable) -> None:
         self._enter[(main, sub)] = enter
@@ -139,7 +135,7 @@ class FlightModes:
         return MODE_NAMES.get((main, sub), f"{main}.{sub}")
 
     def note(self, main: int, sub: int) -> None:
-        """Record a mode the rig is already in (e.g. OFFBOARD set by a set-point message)."""
+        """Record a mode the rig is already in (e.g. AUTO.LOITER once a take-off completes)."""
         old = (self.main, self.sub)
         self.main, self.sub = main, sub
         if self.on_leave is not None:

@@ -187,6 +187,7 @@ class MissionExecutor:
             keep = [i for i, s in enumerate(plan.seqs) if s <= last]
             plan = dc_replace(plan, waypoints=plan.waypoints[keep], radii=plan.radii[keep], holds=plan.holds[keep],
                               speeds=plan.speeds[keep], free_xy=plan.free_xy[keep], lands=plan.lands[keep],
+                              horizontal_m=plan.horizontal_m[keep] if plan.horizontal_m.size else plan.horizontal_m,
                               seqs=tuple(plan.seqs[i] for i in keep),
                               return_seq=plan.return_seq if plan.return_seq <= last else -1)
         index = plan.nav_index(first)

@@ -87,7 +87,7 @@ class MissionTransfer:
         self.upload = None
         self.uploads_failed += 1
         self._ack(up.channel, up.peer, result)
-        self.srv.statustext(up.channel, M.MAV_SEVERITY_WARNING, f"mission upload failed: {reason}")
+        self.srv.statustext(None, M.MAV_SEVERITY_WARNING, f"mission upload failed: {reason}")
 
     def _request_missing(self, now: float) -> None:
         up = self.upload
@@ -112,7 +112,7 @@ class MissionTransfer:
         if up is not None and up.channel is not channel:
             if now - up.last_progress < GIVE_UP_S:
                 self._ack(channel, peer, M.MAV_MISSION_DENIED)
-                self.srv.statustext(channel, M.MAV_SEVERITY_WARNING, "mission upload denied: another upload is in progress")
+                self.srv.statustext(None, M.MAV_SEVERITY_WARNING, "mission upload denied: another upload is in progress")
                 return
             self._fail(M.MAV_MISSION_OPERATION_CANCELLED, "timed out")
             up = None
@@ -129,7 +129,7 @@ class MissionTransfer:
             return
         if n > MAX_ITEMS:
             self._ack(channel, peer, M.MAV_MISSION_NO_SPACE)
-            self.srv.statustext(channel, M.MAV_SEVERITY_WARNING, f"mission upload refused: {n} items, at most {MAX_ITEMS}")
+            self.srv.statustext(None, M.MAV_SEVERITY_WARNING, f"mission upload refused: {n} items, at most {MAX_ITEMS}")
             return
         self.upload = _Upload(channel=channel, peer=peer, count=n, int_mode=self._int_mode.get(channel, True),
                               last_progress=now)
@@ -264,14 +264,13 @@ class MissionTransfer:
             self.executor.clear()
         except StateWriteError as exc:
             self._ack(channel, peer, M.MAV_MISSION_ERROR, mtype)
-            self.srv.statustext(channel, M.MAV_SEVERITY_ERROR, f"mission not cleared: {exc}")
+            self.srv.statustext(None, M.MAV_SEVERITY_ERROR, f"mission not cleared: {exc}")
             return False
         return True
 
     def set_current(self, msg, channel) -> None:
         result, follow = self.executor.set_current(msg.seq)
-        for m in follow:
-            channel.send(m)
+        self.srv.send_follow(channel, follow)
         channel.send(self.executor.current_message())
 
     # --- registration ------------------------------------------------------------------------------------
