@@ -18,7 +18,7 @@ Two ways to run a rig:
           conn = connect(rig.tcp_url)
 
 Client helpers: ``recv`` (next matching message), ``recv_text`` (next STATUSTEXT, chunks
-joined), ``command`` (COMMAND_LONG -> its ACK),
+joined), ``command`` (COMMAND_LONG -> its ACK), ``start_offboard`` (a set-point, then OFFBOARD),
 ``all_params`` (the whole parameter table), ``collect`` / ``count_in_window`` /
 ``stamp_s`` (count messages against their own simulated-time stamps).
 
@@ -49,11 +49,9 @@ from collections import defaultdict
 from protocol.dialect import use_hilms_dialect
 
 START_TIMEOUT_S = 240.0  # a cold numba cache compiles the step loop first (about 1-2 min under load)
-# The link's tests exercise the MAVLink services, which do not depend on the plant: they fly the
-# ideal plant (`hilms-ideal`) so that their flight checks (tolerances, recovery when level) test
-# the protocol, not the hardware rig's imperfections (those have tests of their own under
-# tests/rig_emulator/physics and simulation). Pass ``airframe=None`` for the product default.
-TEST_AIRFRAME = "hilms-ideal"
+# Served rigs fly the product's default plant, the hardware rig (`hilms`): what users fly. A test
+# that needs the ideal physics passes ``airframe="hilms-ideal"`` and says why.
+TEST_AIRFRAME = "hilms"
 NAN = float("nan")
 
 
@@ -160,6 +158,22 @@ def command(conn, cmd: int, *params, target=(1, 1), confirmation=0, timeout=10.0
     p = list(params) + [NAN] * (7 - len(params))
     conn.mav.command_long_send(target[0], target[1], cmd, confirmation, *p)
     return recv(conn, "COMMAND_ACK", timeout, lambda m: m.command == cmd)
+
+
+def start_offboard(conn, send_setpoint, target=(1, 1), timeout=10.0):
+    """PX4's offboard start, as MAVSDK's ``offboard.start()`` does it: a set-point first
+    (``send_setpoint()``; the stream must already flow), then DO_SET_MODE OFFBOARD. Returns the
+    COMMAND_ACK (None on timeout)."""
+    from protocol.dialect import mavlink as M
+
+    ack = None
+    for _ in range(3):  # a refusal (the set-point judged stale by a rig running far faster than real time) retries
+        send_setpoint()
+        ack = command(conn, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 6, 0, target=target,
+                      timeout=timeout)
+        if ack is None or ack.result != M.MAV_RESULT_DENIED:
+            break
+    return ack
 
 
 def all_params(conn, timeout=10.0) -> dict:

@@ -9,7 +9,7 @@ import pytest
 from protocol.dialect import mavlink as M
 from protocol.mission_items import waypoint_items
 from rig_emulator.link.commands.modes import AUTO, AUTO_LOITER, split_custom_mode
-from rig_emulator.testing.rig import MissionClient, RigThread, command, connect, recv, recv_text
+from rig_emulator.testing.rig import MissionClient, RigThread, command, connect, recv, recv_text, start_offboard
 
 POS = M.POSITION_TARGET_TYPEMASK_X_IGNORE | M.POSITION_TARGET_TYPEMASK_Y_IGNORE | M.POSITION_TARGET_TYPEMASK_Z_IGNORE
 REST = (M.POSITION_TARGET_TYPEMASK_AX_IGNORE | M.POSITION_TARGET_TYPEMASK_AY_IGNORE | M.POSITION_TARGET_TYPEMASK_AZ_IGNORE
@@ -49,8 +49,8 @@ def test_breach_in_flight_holds_and_reports():
         assert sys_status.onboard_control_sensors_present & M.MAV_SYS_STATUS_GEOFENCE
         assert sys_status.onboard_control_sensors_enabled & M.MAV_SYS_STATUS_GEOFENCE
         assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
-        conn.mav.set_position_target_local_ned_send(0, 1, 1, M.MAV_FRAME_LOCAL_NED, POS | REST, 0, 0, 0,
-                                                    0, 0, -0.5, 0, 0, 0, 0, 0)  # climb at 0.5 m/s, through 1.5 m
+        assert start_offboard(conn, lambda: conn.mav.set_position_target_local_ned_send(
+            0, 1, 1, M.MAV_FRAME_LOCAL_NED, POS | REST, 0, 0, 0, 0, 0, -0.5, 0, 0, 0, 0, 0)).result == 0  # climb at 0.5 m/s
         got = recv_text(conn, lambda t: t.startswith("fence breach"), timeout=30.0)
         assert got is not None and "above the fence maximum 1.5 m" in got[1] and "hold" in got[1], got
         status = recv(conn, "FENCE_STATUS", 5.0)
@@ -77,8 +77,8 @@ def test_breach_actions(action, expect):
         conn = connect(rig.tcp_url)
         conn.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
         assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
-        conn.mav.set_position_target_local_ned_send(0, 1, 1, M.MAV_FRAME_LOCAL_NED, VEL | REST, 3.0, 0, -1.0,
-                                                    0, 0, 0, 0, 0, 0, 0, 0)
+        assert start_offboard(conn, lambda: conn.mav.set_position_target_local_ned_send(
+            0, 1, 1, M.MAV_FRAME_LOCAL_NED, VEL | REST, 3.0, 0, -1.0, 0, 0, 0, 0, 0, 0, 0, 0)).result == 0
         got = recv_text(conn, lambda t: t.startswith("fence breach"), timeout=30.0)
         assert got is not None and f"{action} (" in got[1] and expect in got[1], got
         if action == "terminate":

@@ -12,7 +12,7 @@ import pytest
 from protocol.dialect import mavlink as M
 from protocol.geodesy import Home, local_enu_to_global
 from rig_emulator.link.commands.modes import AUTO, AUTO_LOITER, OFFBOARD, split_custom_mode
-from rig_emulator.testing.rig import RigThread, command, connect, recv, recv_text
+from rig_emulator.testing.rig import RigThread, command, connect, recv, recv_text, start_offboard
 
 POS = M.POSITION_TARGET_TYPEMASK_X_IGNORE | M.POSITION_TARGET_TYPEMASK_Y_IGNORE | M.POSITION_TARGET_TYPEMASK_Z_IGNORE
 VEL = M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMASK_VY_IGNORE | M.POSITION_TARGET_TYPEMASK_VZ_IGNORE
@@ -59,7 +59,9 @@ def mode_of(conn):
 
 def test_velocity_climb_then_body_offset_position(link):
     rig, conn = link
-    last = hold_for(conn, 4.0, lambda: local(conn, M.MAV_FRAME_LOCAL_NED, POS | ACC | YAW | RATE, v=(0, 0, -0.4)))
+    climb = lambda: local(conn, M.MAV_FRAME_LOCAL_NED, POS | ACC | YAW | RATE, v=(0, 0, -0.4))  # noqa: E731
+    assert start_offboard(conn, climb).result == M.MAV_RESULT_ACCEPTED
+    last = hold_for(conn, 4.0, climb)
     assert -last.z > 1.0 and abs(last.vz + 0.4) < 0.15, last  # climbing at about 0.4 m/s
     assert mode_of(conn)[0] == OFFBOARD
     assert rig.server.counters.dropped.get("setpoint_refused", 0) == 0
@@ -83,6 +85,7 @@ def test_global_int_position(link):
     send = lambda: conn.mav.set_position_target_global_int_send(  # noqa: E731
         0, 1, 1, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, VEL | ACC | YAW | RATE, round(lat * 1e7), round(lon * 1e7), 1.5,
         0, 0, 0, 0, 0, 0, 0, 0)
+    assert start_offboard(conn, send).result == M.MAV_RESULT_ACCEPTED
     last = hold_for(conn, 12.0, send)
     assert np.allclose([last.y, last.x, -last.z], [1.5, -1.0, 1.5], atol=0.25), last
 
@@ -91,6 +94,7 @@ def test_attitude_thrust_moves_altitude_and_body_rates_turn(link):
     rig, conn = link
     q_level = [math.cos(math.pi / 4), 0, 0, math.sin(math.pi / 4)]  # yaw 90 deg (east): the rig's start heading
     full = lambda: conn.mav.set_attitude_target_send(0, 1, 1, 0b111, q_level, 0, 0, 0, 1.0)  # noqa: E731
+    assert start_offboard(conn, full).result == M.MAV_RESULT_ACCEPTED
     last = hold_for(conn, 1.5, full)
     assert -last.z > 0.5 and -last.vz > 0.5, last  # thrust 1.0: 4 x 8.3 N against 21.9 N of weight
     zero = lambda: conn.mav.set_attitude_target_send(0, 1, 1, 0b111, q_level, 0, 0, 0, 0.0)  # noqa: E731
@@ -126,7 +130,8 @@ def test_setpoint_timeout_holds_position():
         conn = connect(rig.tcp_url)
         conn.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
         assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
-        local(conn, M.MAV_FRAME_LOCAL_NED, POS | ACC | YAW | RATE, v=(0, 0, -0.5))  # one set-point, then silence
+        climb = lambda: local(conn, M.MAV_FRAME_LOCAL_NED, POS | ACC | YAW | RATE, v=(0, 0, -0.5))  # noqa: E731
+        assert start_offboard(conn, climb).result == M.MAV_RESULT_ACCEPTED  # one set-point, then silence
         got = recv_text(conn, lambda t: t.startswith("offboard set-points lost"))
         assert got is not None and got[0] == M.MAV_SEVERITY_CRITICAL and "hold" in got[1], got
         assert mode_of(conn) == (AUTO, AUTO_LOITER)

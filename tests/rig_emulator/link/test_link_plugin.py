@@ -13,7 +13,7 @@ from rig_emulator.controllers.examples.hover import LevelHover
 from rig_emulator.controllers.runtime import plugin_name
 from rig_emulator.link.commands.modes import OFFBOARD, split_custom_mode
 from rig_emulator.link.parameters.table import ParamTable
-from rig_emulator.testing.rig import RigThread, all_params, command, connect, recv, recv_text
+from rig_emulator.testing.rig import RigThread, all_params, command, connect, recv, recv_text, start_offboard
 
 ARM = M.MAV_CMD_COMPONENT_ARM_DISARM
 POS_ONLY = (M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMASK_VY_IGNORE
@@ -142,9 +142,11 @@ def test_the_offboard_set_point_is_the_plugins_reference(link):
     assert command(conn, ARM, 1).result == M.MAV_RESULT_ACCEPTED
     target_ned = (0.3, -0.2, -1.5)  # north, east, down (m)
     t_end = None
+    send = lambda: conn.mav.set_position_target_local_ned_send(  # noqa: E731
+        0, 1, 1, M.MAV_FRAME_LOCAL_NED, POS_ONLY, *target_ned, 0, 0, 0, 0, 0, 0, 0.0, 0.0)
+    assert start_offboard(conn, send).result == M.MAV_RESULT_ACCEPTED
     while t_end is None or rig.server.rig.time_s < t_end:
-        conn.mav.set_position_target_local_ned_send(0, 1, 1, M.MAV_FRAME_LOCAL_NED, POS_ONLY, *target_ned,
-                                                    0, 0, 0, 0, 0, 0, 0.0, 0.0)
+        send()
         m = recv(conn, "LOCAL_POSITION_NED", 5.0)
         assert m is not None
         if t_end is None:
@@ -162,10 +164,12 @@ def test_an_offboard_attitude_set_point_with_thrust_is_the_plugins_reference(lin
     roll = math.radians(5.0)  # about the front axis, level pitch, heading north
     q = (math.cos(roll / 2), math.sin(roll / 2), 0.0, 0.0)
     t_end = None
+    send = lambda: conn.mav.set_attitude_target_send(  # noqa: E731
+        0, 1, 1, M.ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE | M.ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE
+        | M.ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE, q, 0, 0, 0, 0.6)
+    assert start_offboard(conn, send).result == M.MAV_RESULT_ACCEPTED
     while t_end is None or rig.server.rig.time_s < t_end:
-        conn.mav.set_attitude_target_send(0, 1, 1, M.ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE
-                                          | M.ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE
-                                          | M.ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE, q, 0, 0, 0, 0.6)
+        send()
         assert recv(conn, "ATTITUDE", 5.0) is not None
         if t_end is None:
             t_end = rig.server.rig.time_s + 0.5

@@ -9,7 +9,7 @@ pytestmark = [pytest.mark.slow]
 
 from protocol.dialect import mavlink as M
 from protocol.mission_items import MissionItem
-from rig_emulator.testing.rig import MissionClient, RigThread, command, connect, recv
+from rig_emulator.testing.rig import MissionClient, RigThread, command, connect, recv, start_offboard
 
 ENU = M.MAV_FRAME_LOCAL_ENU
 BASE = M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
@@ -106,13 +106,13 @@ def test_start_with_a_last_item_and_the_guided_setpoint(flight):
     assert command(conn, M.MAV_CMD_MISSION_START, 1, 2).result == M.MAV_RESULT_ACCEPTED
     assert _reached(conn, 2) == [1, 2]
     assert _until_state(conn, M.MISSION_STATE_COMPLETE).seq == 2
-    # the guided path: SET_POSITION_TARGET_LOCAL_NED moves the set-point at once (OFFBOARD)
+    # the guided path: SET_POSITION_TARGET_LOCAL_NED, then OFFBOARD, moves the set-point at once
     mask = M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMASK_VY_IGNORE | \
         M.POSITION_TARGET_TYPEMASK_VZ_IGNORE | M.POSITION_TARGET_TYPEMASK_AX_IGNORE | \
         M.POSITION_TARGET_TYPEMASK_AY_IGNORE | M.POSITION_TARGET_TYPEMASK_AZ_IGNORE | \
         M.POSITION_TARGET_TYPEMASK_YAW_IGNORE | M.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
-    conn.mav.set_position_target_local_ned_send(0, 1, 1, M.MAV_FRAME_LOCAL_NED, mask, 0.3, 0.2, -1.2,
-                                                0, 0, 0, 0, 0, 0, 0, 0)
+    assert start_offboard(conn, lambda: conn.mav.set_position_target_local_ned_send(
+        0, 1, 1, M.MAV_FRAME_LOCAL_NED, mask, 0.3, 0.2, -1.2, 0, 0, 0, 0, 0, 0, 0, 0)).result == M.MAV_RESULT_ACCEPTED
     tgt = recv(conn, "POSITION_TARGET_LOCAL_NED", 5, lambda m: abs(m.x - 0.3) < 1e-6)
     assert tgt is not None and abs(tgt.y - 0.2) < 1e-6 and abs(tgt.z + 1.2) < 1e-6
 

@@ -3,7 +3,7 @@
 from protocol.dialect import mavlink as M
 from rig_emulator.config.schema import STRATEGIES
 from rig_emulator.link.parameters.table import ParamTable
-from rig_emulator.testing.rig import RigThread, all_params, command, connect, recv, stamp_s
+from rig_emulator.testing.rig import RigThread, all_params, command, connect, recv, stamp_s, start_offboard
 
 
 def test_list_is_complete_and_consistent(client):
@@ -55,8 +55,8 @@ def _fly_north(strategy_index: float | None) -> list[tuple[float, float]]:
             c.mav.param_set_send(1, 1, b"CTL_STRATEGY", strategy_index, M.MAV_PARAM_TYPE_REAL32)
             assert recv(c, "PARAM_VALUE").param_value == strategy_index
         assert command(c, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
-        c.mav.set_position_target_local_ned_send(0, 1, 1, M.MAV_FRAME_LOCAL_NED, 0b0000_1101_1111_1000,
-                                                 1.0, 0.0, 0.0, 0, 0, 0, 0, 0, 0, 0, 0)
+        assert start_offboard(c, lambda: c.mav.set_position_target_local_ned_send(
+            0, 1, 1, M.MAV_FRAME_LOCAL_NED, 0b0000_1101_1111_1000, 1.0, 0.0, 0.0, 0, 0, 0, 0, 0, 0, 0, 0)).result == 0
         target = recv(c, "POSITION_TARGET_LOCAL_NED", condition=lambda m: abs(m.x - 1.0) < 1e-6)
         assert target is not None
         hb = recv(c, "HEARTBEAT")
