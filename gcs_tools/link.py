@@ -75,7 +75,8 @@ class Link:
         now = heartbeat_clock()
         if now < self._next_heartbeat:
             return
-        self._next_heartbeat = max(self._next_heartbeat + HEARTBEAT_PERIOD_S, now)
+        due = self._next_heartbeat + HEARTBEAT_PERIOD_S
+        self._next_heartbeat = due if due > now else now + HEARTBEAT_PERIOD_S  # behind (or the first): from now
         try:
             self.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, M.MAV_STATE_ACTIVE)
         except OSError as exc:

@@ -13,8 +13,9 @@
   ``warning`` (report only), ``hold``, ``return``, ``terminate``, ``land``. The action's
   mode stands until a mode command overrides it (as PX4 lets the operator take over) or
   the vehicle is back inside: set-points never change the mode
-  (:mod:`rig_emulator.link.commands.offboard_setpoints`). Being inside again, whether armed
-  or not, clears the breach ("fence: back inside" and FENCE_STATUS).
+  (:mod:`rig_emulator.link.commands.offboard_setpoints`). Being inside again by
+  :data:`FENCE_CLEAR_MARGIN_M`, whether armed or not, clears the breach ("fence: back
+  inside" and FENCE_STATUS).
 
 A mode the rig does not provide (AUTO.LAND, AUTO.RTL before they exist) falls back to
 holding the position, and the STATUSTEXT says so. Each action is one readable line to
@@ -24,11 +25,16 @@ every peer.
 from __future__ import annotations
 
 
+from dataclasses import replace
+
 from protocol.dialect import mavlink as M
 from protocol.mission_checks import MissionLimits, fence_breach
 from rig_emulator.link.commands.modes import AUTO, AUTO_LAND, AUTO_LOITER, AUTO_RTL, OFFBOARD
 
 FENCE_PERIOD_S = 0.05
+#: a breach clears once the vehicle is this far inside (m): a hold made at the breach sits on the
+#: boundary, and its few centimetres of hover would otherwise count as breaches again and again
+FENCE_CLEAR_MARGIN_M = 0.5
 _MODE_OF = {"hold": (AUTO, AUTO_LOITER), "land": (AUTO, AUTO_LAND), "return": (AUTO, AUTO_RTL)}
 
 
@@ -104,15 +110,18 @@ class FenceMonitor:
         self._next_s = now + FENCE_PERIOD_S
         cfg = srv.rig.cfg
         snap = srv.snapshot()
-        why = fence_breach(snap.position, mission_limits(cfg))
-        if why is None:
-            if self.breached is not None:
+        limits = mission_limits(cfg)
+        if self.breached is not None:
+            inside = replace(limits, fence_radius_m=limits.fence_radius_m - FENCE_CLEAR_MARGIN_M,
+                             fence_alt_max_m=limits.fence_alt_max_m - FENCE_CLEAR_MARGIN_M,
+                             fence_alt_min_m=limits.fence_alt_min_m + FENCE_CLEAR_MARGIN_M)
+            if fence_breach(snap.position, inside) is None:
                 self.breached = None
                 srv.statustext(None, M.MAV_SEVERITY_INFO, "fence: back inside")
                 srv.broadcast(self.status_message())
-            return
-        if self.breached is not None:
-            self.breached = why  # still outside: the action taken stands until a mode command or back inside
+            return  # still outside: the action taken stands until a mode command or back inside
+        why = fence_breach(snap.position, limits)
+        if why is None:
             return
         self.breached = why
         self.breach_count = (self.breach_count + 1) % 65536

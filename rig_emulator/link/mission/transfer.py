@@ -112,7 +112,8 @@ class MissionTransfer:
         if up is not None and up.channel is not channel:
             if now - up.last_progress < GIVE_UP_S:
                 self._ack(channel, peer, M.MAV_MISSION_DENIED)
-                self.srv.statustext(None, M.MAV_SEVERITY_WARNING, "mission upload denied: another upload is in progress")
+                self.srv.statustext(None, M.MAV_SEVERITY_WARNING,
+                                    "mission upload denied: another upload is in progress")
                 return
             self._fail(M.MAV_MISSION_OPERATION_CANCELLED, "timed out")
             up = None

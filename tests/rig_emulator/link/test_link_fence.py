@@ -49,8 +49,8 @@ def test_breach_in_flight_holds_and_reports():
         assert sys_status.onboard_control_sensors_present & M.MAV_SYS_STATUS_GEOFENCE
         assert sys_status.onboard_control_sensors_enabled & M.MAV_SYS_STATUS_GEOFENCE
         assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
-        assert start_offboard(conn, lambda: conn.mav.set_position_target_local_ned_send(
-            0, 1, 1, M.MAV_FRAME_LOCAL_NED, POS | REST, 0, 0, 0, 0, 0, -0.5, 0, 0, 0, 0, 0)).result == 0  # climb at 0.5 m/s
+        assert start_offboard(conn, lambda: conn.mav.set_position_target_local_ned_send(  # climb at 0.5 m/s
+            0, 1, 1, M.MAV_FRAME_LOCAL_NED, POS | REST, 0, 0, 0, 0, 0, -0.5, 0, 0, 0, 0, 0)).result == 0
         got = recv_text(conn, lambda t: t.startswith("fence breach"), timeout=30.0)
         assert got is not None and "above the fence maximum 1.5 m" in got[1] and "hold" in got[1], got
         status = recv(conn, "FENCE_STATUS", 5.0)

@@ -17,6 +17,8 @@ from pymavlink import mavutil
 from protocol.dialect import mavlink as M
 from protocol.geodesy import local_enu_to_global
 from protocol.mission_items import MissionItem
+from rig_emulator.guidance.offboard import OFB_POS
+from rig_emulator.guidance.runner import OFFBOARD as OFFBOARD_GUIDANCE
 from rig_emulator.link.commands import modes as MD
 from rig_emulator.testing.rig import MissionClient, RigThread, command, connect, recv, recv_text, start_offboard
 
@@ -146,8 +148,7 @@ def test_setpoints_never_change_the_mode_and_offboard_needs_a_fresh_stream():
         # a 10 Hz stream in POSCTL is stored, not flown, and never changes the mode
         _wait_sim(conn, 2.0, 0.1, lambda: _local(conn, 1.0, 2.0, -1.5))
         assert _mode(conn) == (MD.POSCTL, 0)
-        target, _ = _target_and_position(conn)
-        assert abs(target[0] - 1.0) > 0.5 or abs(target[1] - 2.0) > 0.5, target
+        assert rig.server.rig.sim.gp.gtype != OFFBOARD_GUIDANCE  # stored, not flown
         # the stream stopped 1 s ago: stale, refused
         _wait_sim(conn, 1.0)
         assert _set_mode(conn, "OFFBOARD").result == DENIED
@@ -159,8 +160,9 @@ def test_setpoints_never_change_the_mode_and_offboard_needs_a_fresh_stream():
         ack = recv(conn, "COMMAND_ACK", 10.0, lambda m: m.command == M.MAV_CMD_DO_SET_MODE)
         assert ack is not None and ack.result == ACCEPTED
         assert _mode(conn) == (MD.OFFBOARD, 0)
-        target, _ = _target_and_position(conn)
-        assert np.allclose(target, [1.0, 2.0, -1.5], atol=1e-6), target  # the stored set-point is flown
+        gp = rig.server.rig.sim.gp  # disarmed, the rig reports no target: read what its guidance flies
+        assert gp.gtype == OFFBOARD_GUIDANCE  # the stored set-point is flown: world ENU (east, north, up)
+        assert np.allclose(gp.offboard[OFB_POS:OFB_POS + 3], [2.0, 1.0, 1.5], atol=1e-6), gp.offboard
         assert rig.server.offboard.accepted >= 20
         conn.close()
         other.close()
@@ -236,8 +238,8 @@ def test_far_items_are_refused_for_the_fence_and_refusals_reach_every_link():
         assert command(conn, M.MAV_CMD_DO_FENCE_ENABLE, 0).result == ACCEPTED
         # fence off: the leg limit (MIS_DIST_WPS) still refuses it, naming the leg, not the ground
         assert MissionClient(conn).upload([_far_item(home, 0.0, 50_000.0)]) == M.MAV_MISSION_INVALID_PARAM5_X
-        got = recv_text(other, lambda t: t.startswith("mission upload failed"))
-        assert got is not None and "MIS_DIST_WPS" in got[1], got
+        got = recv_text(other, lambda t: t.startswith("mission upload failed") and "MIS_DIST_WPS" in t)
+        assert got is not None and "50.00 km leg from home" in got[1], got
         # a refused mode: the ACK to the asker only, the reason to both
         assert _set_mode(conn, "MANUAL").result == DENIED
         assert recv_text(other, lambda t: "MANUAL needs stick input" in t) is not None
@@ -266,7 +268,8 @@ def test_rig_gcs_fly_sends_heartbeats_and_the_rig_never_loses_its_ground_station
         heartbeat_in = srv.gcs_loss.heard
         monkeypatch.setattr(srv.gcs_loss, "heard", lambda msg: (
             msg.type == M.MAV_TYPE_GCS and heard.append(clock()), heartbeat_in(msg))[1])
-        assert main(["fly", client_url(rig.tcp_url), "--rectangle", "2x1", "--altitude", "1"]) == 0
+        assert main(["fly", client_url(rig.tcp_url), "--rectangle", "2x1", "--altitude", "1", "--timeout", "120"]) == 0, (
+            texts, capsys.readouterr())
         t_end = srv.rig.time_s
         out = capsys.readouterr().out
         assert "all 5 waypoints reached" in out, out
