@@ -192,6 +192,8 @@ def _stream_for(conn, seconds, n, e, d):
 def test_fence_holds_under_a_setpoint_stream_and_fence_status_is_true():
     with RigThread(speedup=SPEEDUP, overrides={"fence.radius": 8.0, "fence.action": "hold"}) as rig:
         conn = _gcs(rig)
+        watch = _gcs(rig, sysid=254)  # a second ground station that only reads the rig's STATUSTEXT
+        watch.mav.request_data_stream_send(1, 1, M.MAV_DATA_STREAM_ALL, 0, 0)  # no telemetry to pile up unread
         _take_off(conn, rig, 2.5)
         assert start_offboard(conn, lambda: _local(conn, 20.0, 0.0, -2.5)).result == ACCEPTED
         far, now = _stream_for(conn, 25.0, 20.0, 0.0, -2.5)
@@ -202,9 +204,14 @@ def test_fence_holds_under_a_setpoint_stream_and_fence_status_is_true():
         assert (fs.breach_status, fs.breach_count, fs.breach_type) == (1, 1, M.FENCE_BREACH_BOUNDARY)
         # the operator takes over (a mode command) and brings it back inside
         assert start_offboard(conn, lambda: _local(conn, 0.0, 0.0, -2.5)).result == ACCEPTED
-        assert recv_text(conn, lambda t: t == "fence: back inside", timeout=60.0) is not None
-        _, now = _stream_for(conn, 0.5, 0.0, 0.0, -2.5)
-        assert now <= 8.0
+        for _ in range(30):
+            _, now = _stream_for(conn, 1.0, 0.0, 0.0, -2.5)
+            if now < 6.0:
+                break
+        assert now < 6.0, now
+        got = recv_text(watch, lambda t: t.startswith("fence"), timeout=10.0)  # the texts in order
+        assert got is not None and got[1].startswith("fence breach"), got
+        assert recv_text(watch, lambda t: t.startswith("fence"), timeout=10.0)[1] == "fence: back inside"
         fs = _fence_status(conn)
         assert (fs.breach_status, fs.breach_count) == (0, 1)
         # out again: a second breach, counted, held again
@@ -214,6 +221,7 @@ def test_fence_holds_under_a_setpoint_stream_and_fence_status_is_true():
         assert (fs.breach_status, fs.breach_count) == (1, 2)
         assert _mode(conn) == (MD.AUTO, MD.AUTO_LOITER)
         conn.close()
+        watch.close()
 
 
 def _far_item(home, east, north, frame=M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, z=2.0):
