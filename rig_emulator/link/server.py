@@ -41,6 +41,7 @@ from rig_emulator.link.commands.flight_control import FlightControl
 from rig_emulator.link.commands.gcs_loss import GcsLoss
 from rig_emulator.link.endpoints.counters import LinkCounters
 from rig_emulator.link.endpoints.sockets import Endpoint, open_endpoint
+from rig_emulator.headless.divergence import DivergenceWatch
 from rig_emulator.link.telemetry.fault_report import FaultReporter
 from rig_emulator.link.ftp.component_metadata import metadata_files
 from rig_emulator.link.commands.flight_monitors import FenceMonitor, OffboardLossMonitor
@@ -96,6 +97,7 @@ class RigServer:
         self.ctx.mission = self.mission
         self.mission_transfer = MissionTransfer(self, self.mission)
         self.fault_reporter = FaultReporter()
+        self.divergence = DivergenceWatch()  # onboard position vs SIM_STATE (headless/divergence.py)
         self.offboard = OffboardSetpoints(self)
         self.offboard_loss = OffboardLossMonitor(self, self.offboard)
         self.fence = FenceMonitor(self)
@@ -328,6 +330,9 @@ class RigServer:
         self.fence.poll()
         self.flight.poll(self.snapshot)
         self.report_faults()
+        text = self.divergence.poll(self.rig)
+        if text is not None:
+            self.statustext(None, M.MAV_SEVERITY_NOTICE, text)
         self.console.poll(self.rig.time_s, self.rig.armed, self.modes.main, self.modes.sub)
 
     def report_faults(self) -> None:
