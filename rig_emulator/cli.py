@@ -381,19 +381,28 @@ def cmd_divergence(args) -> int:
 
 
 def cmd_hover_thrust(args) -> int:
-    from rig_emulator.headless.hover_thrust import format_measurement, measure_hover_fraction
+    from rig_emulator.headless.hover_thrust import fly_fractions, format_measurement, format_trial, measure_hover_fraction
 
     overrides = _overrides(args)
     results = []
     with compile_notice():
         for airframe in args.airframe or ["hilms", "hilms-ideal"]:
+            if args.thrust:
+                trials = fly_fractions(airframe, args.thrust, seed=args.seed, overrides=overrides,
+                                       settle_s=args.settle, window_s=args.window)
+                results.append({"airframe": airframe, "seed": args.seed, "trials": [t.__dict__ for t in trials]})
+                if not args.json:
+                    print(f"{airframe} (seed {args.seed}, {args.settle:g} s hold at 2 m, then {args.window:g} s level "
+                          "at each thrust):")
+                    print("\n".join(format_trial(t, args.window) for t in trials), flush=True)
+                continue
             m = measure_hover_fraction(airframe, seed=args.seed, overrides=overrides, settle_s=args.settle,
                                        window_s=args.window)
-            results.append(m)
+            results.append(m.as_dict())
             if not args.json:
                 print(format_measurement(m), flush=True)
     if args.json:
-        print(json.dumps([m.as_dict() for m in results]))
+        print(json.dumps(results))
     return 0
 
 
@@ -466,6 +475,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--settle", type=float, default=20.0, help="seconds of position hold at 2 m before the "
                                                              "thrust is applied (default %(default)s)")
     p.add_argument("--window", type=float, default=5.0, help="seconds flown at each thrust (default %(default)s)")
+    p.add_argument("--thrust", type=float, nargs="+", metavar="F",
+                   help="fly these thrusts (0..1) and print the climb of each, instead of searching the hover")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one parameter")
     p.set_defaults(func=cmd_hover_thrust)

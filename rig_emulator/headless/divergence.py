@@ -56,7 +56,7 @@ def divergence_stats(series: dict, threshold_m: float, times=(30.0, 60.0)) -> Di
     over = np.nonzero(dist > threshold_m)[0]
     at = {}
     for when in times:
-        if t[0] <= when <= t[-1] + 1e-9:
+        if t[0] <= when <= t[-1] + (t[-1] - t[-2] if t.size > 1 else 0.0) + 1e-9:
             i = int(np.argmin(np.abs(t - when)))
             at[float(when)] = (float(d[i, 1]), float(d[i, 0]), float(-d[i, 2]))  # ENU -> NED
     slid_on, _ = _ground_path(t, series["pos"])

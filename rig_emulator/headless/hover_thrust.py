@@ -11,14 +11,23 @@ convex curve, the per-motor gains, the -50 gr.F running bias, ESC quantisation,
 slowly (``motors.thrust_loop_time_constant``, 200 s): the fraction that hovers depends on how
 long the rig has flown.
 
+* :class:`HoverThrustEstimate`: what a ground station reads as MPC_THR_HOVER on the served rig.
+  Like PX4's hover thrust estimator (``MPC_USE_HTE``), it learns the value in flight: the mean
+  collective thrust the position controller commands while the rig holds its altitude (armed,
+  position control, above :data:`AIRBORNE_M`, climbing or sinking slower than
+  :data:`STEADY_M_S`), averaged over :data:`ESTIMATE_TAU_S`. In a steady hover that mean is by
+  definition what carries the weight, the motors' activity included: with the convex true
+  curve the attitude law's differential commands raise the mean thrust (the ``hilms`` SMC's
+  chattering: about 0.003 of the fraction). Before the rig has flown it is
+  :func:`hover_fraction`.
 * :func:`hover_fraction`: the fraction whose motor commands, through the firmware's Eq. 40
   inverse with the thrust loop's present correction, make the motors' true thrust carry the
-  weight, level (the thrust chain solved in its steady state, no flight; what a ground station
-  reads as MPC_THR_HOVER).
+  weight, level and steady (the thrust chain solved, no flight).
 * :func:`measure_hover_fraction`: flies it (``rig-emulator hover-thrust``): hold 2 m in position
   mode for ``settle_s``, then fly level attitude set-points at a thrust for ``window_s`` and fit
   the altitude the rig reports (its onboard position) with a parabola; the fraction of zero
-  vertical acceleration is found by the secant rule.
+  vertical acceleration is the root of a straight line fitted through trials around the served
+  value.
 """
 
 from __future__ import annotations
@@ -30,6 +39,10 @@ import numpy as np
 
 ALTITUDE_M = 2.0  # where the measurement hovers before the thrust is applied
 SAMPLE_S = 0.05  # altitude sampling of the measurement
+FLOOR_M = 0.3  # a trial that sinks to this onboard altitude ends there
+AIRBORNE_M = 0.5  # the estimate learns above this onboard altitude ...
+STEADY_M_S = 0.3  # ... while the vertical speed is under this
+ESTIMATE_TAU_S = 5.0  # time constant of the estimate's average (s of flight)
 
 
 def _chain_thrust(rig, fraction: float) -> float:
@@ -73,12 +86,44 @@ def hover_fraction(rig) -> float:
     return 0.5 * (lo + hi)
 
 
+class HoverThrustEstimate:
+    """MPC_THR_HOVER of the served rig: learnt in steady position-controlled flight from the
+    commanded collective thrust (the rig's log rows of each chunk), else :func:`hover_fraction`."""
+
+    def __init__(self):
+        self.estimate: float | None = None
+        self.learnt_s = 0.0  # flight time the estimate has learnt from
+
+    def update(self, rows: np.ndarray, rig) -> None:
+        """Learn from the log rows a chunk recorded (:meth:`LiveRig.step`'s return)."""
+        if rows.shape[0] == 0 or not rig.armed:
+            return
+        from rig_emulator.simulation import log_layout as L
+
+        ok = ((rows[:, L.MODE] == 0.0) & (rows[:, L.POS + 2] > AIRBORNE_M)
+              & (np.abs(rows[:, L.VEL + 2]) < STEADY_M_S) & (rows[:, L.FAILSAFE] == 0.0))
+        if not ok.any():
+            return
+        dt = rig.sim.log_div * rig.dt
+        u_max = rig.max_collective_thrust()
+        for u1 in rows[ok, L.U]:
+            f = float(u1) / u_max
+            # the mean of everything learnt for the first ESTIMATE_TAU_S, then an exponential average
+            w = dt / (self.learnt_s + dt) if self.learnt_s < ESTIMATE_TAU_S else dt / ESTIMATE_TAU_S
+            self.estimate = f if self.estimate is None else self.estimate + w * (f - self.estimate)
+            self.learnt_s += dt
+
+    def value(self, rig) -> float:
+        return hover_fraction(rig) if self.estimate is None else min(max(self.estimate, 0.0), 1.0)
+
+
 @dataclass(frozen=True)
 class ThrustTrial:
     fraction: float
     accel_m_s2: float  # vertical acceleration of the onboard position, parabola fit over the window
     climb_m: float  # onboard altitude change over the window
     climb_sim_state_m: float  # the physics vehicle's (SIM_STATE)
+    duration_s: float  # how long it flew at the thrust (less than the window when it sank to FLOOR_M)
 
 
 @dataclass(frozen=True)
@@ -88,13 +133,14 @@ class HoverMeasurement:
     settle_s: float
     window_s: float
     nominal: float  # m g / u1_max, the fraction that hovers when the motors follow Eq. 40
-    served: float  # hover_fraction() of the rig when the thrust was applied (MPC_THR_HOVER then)
-    measured: float  # secant root of the trials' acceleration
+    served: float  # MPC_THR_HOVER when the thrust was applied (HoverThrustEstimate learnt over the hold)
+    steady: float  # hover_fraction() then: the thrust chain's steady solution
+    measured: float  # root of the line fitted to the trials' acceleration against the thrust
     trials: list = field(default_factory=list)
 
     def as_dict(self) -> dict:
         return {"airframe": self.airframe, "seed": self.seed, "settle_s": self.settle_s, "window_s": self.window_s,
-                "nominal": self.nominal, "served": self.served, "measured": self.measured,
+                "nominal": self.nominal, "served": self.served, "steady": self.steady, "measured": self.measured,
                 "trials": [t.__dict__ for t in self.trials]}
 
 
@@ -109,25 +155,30 @@ def _rig(airframe: str, seed: int, overrides: dict):
     return rig
 
 
-def _advance(rig, seconds: float) -> None:
+def _advance(rig, seconds: float, estimate: HoverThrustEstimate | None = None) -> None:
     n = int(round(seconds / rig.dt))
     while n > 0:
         k = min(n, rig.chunk_steps_max)
-        rig.step(k)
+        rows = rig.step(k)
+        if estimate is not None:
+            estimate.update(rows, rig)
         n -= k
 
 
-def settle(rig, settle_s: float) -> float:
-    """Arm, climb to :data:`ALTITUDE_M` in position mode and hold it ``settle_s``; returns the heading."""
+def settle(rig, settle_s: float, estimate: HoverThrustEstimate | None = None) -> float:
+    """Arm, climb to :data:`ALTITUDE_M` in position mode and hold it ``settle_s`` (``estimate``
+    learning meanwhile, as the served rig's does); returns the heading."""
     psi = math.radians(rig.cfg["initial.euler_deg"][2])
     rig.arm(True)
     rig.set_position_target([0.0, 0.0, ALTITUDE_M], yaw=psi)
-    _advance(rig, settle_s)
+    _advance(rig, settle_s, estimate)
     return psi
 
 
 def fly_thrust(rig, psi: float, fraction: float, window_s: float) -> ThrustTrial:
-    """Level attitude set-points at collective thrust ``fraction`` for ``window_s`` from now."""
+    """Level attitude set-points at collective thrust ``fraction`` for ``window_s`` from now; the
+    trial ends early when the onboard altitude comes down to :data:`FLOOR_M` (the fit would read
+    the ground)."""
     rig.set_attitude_target(0.0, 0.0, psi, thrust_fraction=fraction)
     t, z, z_true = [], [], []
     steps = max(1, int(round(SAMPLE_S / rig.dt)))
@@ -136,50 +187,62 @@ def fly_thrust(rig, psi: float, fraction: float, window_s: float) -> ThrustTrial
         t.append(rig.time_s - t0)
         z.append(float(rig.position_now()[2]))
         z_true.append(float(rig.sim.x[2]))
+        if z[-1] < FLOOR_M:
+            break
         _advance(rig, steps * rig.dt)
-    accel = 2.0 * float(np.polyfit(np.array(t), np.array(z), 2)[0])
-    return ThrustTrial(fraction=fraction, accel_m_s2=accel, climb_m=z[-1] - z[0], climb_sim_state_m=z_true[-1] - z_true[0])
+    accel = 2.0 * float(np.polyfit(np.array(t), np.array(z), 2)[0]) if len(t) >= 3 else math.nan
+    return ThrustTrial(fraction=fraction, accel_m_s2=accel, climb_m=z[-1] - z[0], climb_sim_state_m=z_true[-1] - z_true[0],
+                       duration_s=t[-1])
 
 
 def measure_hover_fraction(airframe: str = "hilms", seed: int = 0, overrides: dict | None = None,
-                           settle_s: float = 20.0, window_s: float = 5.0, tol_m_s2: float = 0.005,
-                           max_trials: int = 6) -> HoverMeasurement:
-    """Fly the rig at thrusts found by the secant rule until its onboard altitude's acceleration is
-    within ``tol_m_s2`` of zero; each trial is a fresh rig with the same seed, settled alike."""
+                           settle_s: float = 20.0, window_s: float = 5.0, step: float = 0.01) -> HoverMeasurement:
+    """Fly the rig at the served hover fraction and ``step`` either side of it, fit the onboard
+    altitude's vertical acceleration against the thrust with a straight line, fly its root to
+    check it, and return the root of the line through all four (trials that sank to the floor
+    are left out of the fit). Each trial is a fresh rig with the same seed, settled alike."""
     overrides = overrides or {}
-
-    def trial(fraction):
-        rig = _rig(airframe, seed, overrides)
-        psi = settle(rig, settle_s)
-        return fly_thrust(rig, psi, fraction, window_s)
-
     rig = _rig(airframe, seed, overrides)
     nominal = rig.hover_thrust_fraction()
-    psi = settle(rig, settle_s)
-    served = hover_fraction(rig)
+    estimate = HoverThrustEstimate()
+    psi = settle(rig, settle_s, estimate)
+    served = estimate.value(rig)
+    steady = hover_fraction(rig)
     trials = [fly_thrust(rig, psi, served, window_s)]
-    if abs(trials[0].accel_m_s2) > tol_m_s2:
-        other = served + (0.01 if trials[0].accel_m_s2 < 0.0 else -0.01)
-        trials.append(trial(other))
-        while len(trials) < max_trials:
-            a, b = trials[-2], trials[-1]
-            if b.accel_m_s2 == a.accel_m_s2:
-                break
-            f = b.fraction - b.accel_m_s2 * (b.fraction - a.fraction) / (b.accel_m_s2 - a.accel_m_s2)
-            f = min(max(f, 0.0), 1.0)
-            trials.append(trial(f))
-            if abs(trials[-1].accel_m_s2) <= tol_m_s2:
-                break
-    best = min(trials, key=lambda tr: abs(tr.accel_m_s2))
+    trials += fly_fractions(airframe, (served - step, served + step), seed, overrides, settle_s, window_s)
+
+    def root(ts):
+        ok = [tr for tr in ts if tr.duration_s >= window_s - 1e-9 and math.isfinite(tr.accel_m_s2)]
+        if len(ok) < 2:
+            return served
+        slope, icpt = np.polyfit([tr.fraction for tr in ok], [tr.accel_m_s2 for tr in ok], 1)
+        return float(min(max(-icpt / slope, 0.0), 1.0)) if slope > 0.0 else served
+
+    trials += fly_fractions(airframe, (root(trials),), seed, overrides, settle_s, window_s)
     return HoverMeasurement(airframe=airframe, seed=seed, settle_s=settle_s, window_s=window_s, nominal=nominal,
-                            served=served, measured=best.fraction, trials=trials)
+                            served=served, steady=steady, measured=root(trials), trials=trials)
+
+
+def fly_fractions(airframe: str, fractions, seed: int = 0, overrides: dict | None = None, settle_s: float = 20.0,
+                  window_s: float = 5.0) -> list[ThrustTrial]:
+    """One trial per thrust in ``fractions`` (each a fresh rig, settled as in :func:`measure_hover_fraction`)."""
+    out = []
+    for fraction in fractions:
+        rig = _rig(airframe, seed, overrides or {})
+        psi = settle(rig, settle_s)
+        out.append(fly_thrust(rig, psi, fraction, window_s))
+    return out
 
 
 def format_measurement(m: HoverMeasurement) -> str:
     lines = [f"{m.airframe} (seed {m.seed}, {m.settle_s:g} s hold at {ALTITUDE_M:g} m, then {m.window_s:g} s level "
-             f"at each thrust): hovers at {m.measured:.4f} (MPC_THR_HOVER served {m.served:.4f}; m g / u1_max "
-             f"{m.nominal:.4f})"]
-    for tr in m.trials:
-        lines.append(f"  thrust {tr.fraction:.4f}: vertical acceleration {tr.accel_m_s2:+.4f} m/s^2, climb "
-                     f"{tr.climb_m:+.3f} m (SIM_STATE {tr.climb_sim_state_m:+.3f} m) in {m.window_s:g} s")
+             f"at each thrust): hovers at {m.measured:.4f}; MPC_THR_HOVER served {m.served:.4f}; thrust chain "
+             f"steady {m.steady:.4f}; m g / u1_max {m.nominal:.4f}"]
+    lines.extend(format_trial(tr, m.window_s) for tr in m.trials)
     return "\n".join(lines)
+
+
+def format_trial(tr: ThrustTrial, window_s: float) -> str:
+    return (f"  thrust {tr.fraction:.4f}: vertical acceleration {tr.accel_m_s2:+.4f} m/s^2, climb {tr.climb_m:+.3f} m "
+            f"(SIM_STATE {tr.climb_sim_state_m:+.3f} m) in {tr.duration_s:.2f} s"
+            + (f" (sank to {FLOOR_M:g} m: trial ended)" if tr.duration_s < window_s - 1e-9 else ""))

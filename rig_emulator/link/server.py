@@ -42,6 +42,7 @@ from rig_emulator.link.commands.gcs_loss import GcsLoss
 from rig_emulator.link.endpoints.counters import LinkCounters
 from rig_emulator.link.endpoints.sockets import Endpoint, open_endpoint
 from rig_emulator.headless.divergence import DivergenceWatch
+from rig_emulator.headless.hover_thrust import HoverThrustEstimate
 from rig_emulator.link.telemetry.fault_report import FaultReporter
 from rig_emulator.link.ftp.component_metadata import metadata_files
 from rig_emulator.link.commands.flight_monitors import FenceMonitor, OffboardLossMonitor
@@ -98,6 +99,7 @@ class RigServer:
         self.mission_transfer = MissionTransfer(self, self.mission)
         self.fault_reporter = FaultReporter()
         self.divergence = DivergenceWatch()  # onboard position vs SIM_STATE (headless/divergence.py)
+        self.hover_thrust = HoverThrustEstimate()  # MPC_THR_HOVER (headless/hover_thrust.py)
         self.offboard = OffboardSetpoints(self)
         self.offboard_loss = OffboardLossMonitor(self, self.offboard)
         self.fence = FenceMonitor(self)
@@ -292,6 +294,7 @@ class RigServer:
         self.flight.reset()
         self.mission.after_reboot()
         self.fault_reporter = FaultReporter()
+        self.hover_thrust = HoverThrustEstimate()  # the thrust loop's correction starts afresh
         self._snap = None
         self.clock_rebase = True
         for ch in self.channels.values():
@@ -322,7 +325,7 @@ class RigServer:
 
     # --- the loop ------------------------------------------------------------------------------------
     def step_chunk(self) -> None:
-        self.rig.step(self.chunk_steps)
+        self.hover_thrust.update(self.rig.step(self.chunk_steps), self.rig)
         self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
