@@ -79,6 +79,7 @@ def test_arming_from_the_hang_the_vehicle_stands_still_then_takes_off_from_home(
     assert flight.param_set("EST_DIV_WARN", 1000.0).param_value == 1000.0  # no divergence report here
     att = recv(flight.conn, "ATTITUDE", 30)
     assert math.degrees(abs(att.roll)) > 8.0 and math.degrees(abs(att.pitch)) > 8.0  # the hang
+    flight.fly(0.5)  # the rig's clock
     # armed in the default mode, holding the initial position on the ground: the controllers level
     # the rig and run the motors near hover thrust; neither vehicle moves along the ground
     assert command(flight.conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
