@@ -74,8 +74,8 @@ def onboard_minus_physics(rig) -> tuple[float, float, float] | None:
     sp, ss = sim.sensing.params, sim.sensing.state
     if not sp.estimated:
         return None
-    o, x = ss.onboard, sim.x
-    return float(o[0] - x[0]), float(o[1] - x[1]), float(o[2] - x[2])
+    o, x = ss.onboard.item, sim.x.item
+    return o(0) - x(0), o(1) - x(1), o(2) - x(2)
 
 
 class DivergenceWatch:

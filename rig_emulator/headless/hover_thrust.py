@@ -37,6 +37,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rig_emulator.simulation import log_layout as L
+
 ALTITUDE_M = 2.0  # where the measurement hovers before the thrust is applied
 SAMPLE_S = 0.05  # altitude sampling of the measurement
 FLOOR_M = 0.3  # a trial that sinks to this onboard altitude ends there
@@ -96,18 +98,16 @@ class HoverThrustEstimate:
 
     def update(self, rows: np.ndarray, rig) -> None:
         """Learn from the log rows a chunk recorded (:meth:`LiveRig.step`'s return)."""
-        if rows.shape[0] == 0 or not rig.armed:
-            return
-        from rig_emulator.simulation import log_layout as L
-
-        ok = ((rows[:, L.MODE] == 0.0) & (rows[:, L.POS + 2] > AIRBORNE_M)
-              & (np.abs(rows[:, L.VEL + 2]) < STEADY_M_S) & (rows[:, L.FAILSAFE] == 0.0))
-        if not ok.any():
+        if rows.shape[0] == 0 or not rig.sim.armed:
             return
         dt = rig.sim.log_div * rig.dt
-        u_max = rig.max_collective_thrust()
-        for u1 in rows[ok, L.U]:
-            f = float(u1) / u_max
+        u_max = 4.0 * rig.sim.cp.f_max  # LiveRig.max_collective_thrust
+        item = rows.item  # a row or two a chunk: single items are cheaper than array masks
+        for i in range(rows.shape[0]):
+            if (item(i, L.MODE) != 0.0 or item(i, L.POS + 2) <= AIRBORNE_M or abs(item(i, L.VEL + 2)) >= STEADY_M_S
+                    or item(i, L.FAILSAFE) != 0.0):
+                continue
+            f = item(i, L.U) / u_max
             # the mean of everything learnt for the first ESTIMATE_TAU_S, then an exponential average
             w = dt / (self.learnt_s + dt) if self.learnt_s < ESTIMATE_TAU_S else dt / ESTIMATE_TAU_S
             self.estimate = f if self.estimate is None else self.estimate + w * (f - self.estimate)
