@@ -66,3 +66,12 @@ def test_a_grounded_vehicle_does_not_slide_headless():
     slid = divergence_stats(simulate("harmonic", duration=10.0, seed=2,
                                      overrides={"sim.ground_contact": "frictionless"}).series, 1.0)
     assert slid.slid_physics_m > 0.5
+
+
+def test_the_divergence_command_prints_both_plants(capsys):
+    from rig_emulator.cli import main
+
+    assert main(["divergence", "--scenario", "hover", "--duration", "2", "--seed", "3"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert [line.split()[:3] for line in lines] == [["hover", "hilms", "3"], ["hover", "hilms-ideal", "3"]]
+    assert all("max" in line and "rms" in line and "slid on ground" in line for line in lines)

@@ -31,3 +31,15 @@ def test_the_thrust_chain_of_the_ideal_plant_hovers_at_m_g_over_u1_max():
     hw = LiveRig(load_config("hilms"))
     assert hover_fraction(hw) > hw.hover_thrust_fraction() + 0.02
     assert HoverThrustEstimate().value(hw) == hover_fraction(hw)  # before any flight
+
+
+def test_the_hover_thrust_command_flies_given_thrusts(capsys):
+    import json
+
+    from rig_emulator.cli import main
+
+    assert main(["hover-thrust", "--airframe", "hilms-ideal", "--thrust", "0.6", "--settle", "4", "--window", "1",
+                 "--json"]) == 0
+    (out,) = json.loads(capsys.readouterr().out)
+    (trial,) = out["trials"]
+    assert out["airframe"] == "hilms-ideal" and trial["fraction"] == 0.6 and trial["climb_m"] < -0.5
