@@ -18,7 +18,9 @@ retry counts (4 retries of PARAM_REQUEST_LIST, 5 of each index re-request, read 
 * **load** (:func:`load`): the whole file is checked first (names exist on the vehicle,
   values fit their types); then each value that differs is set and verified; if one fails,
   those already changed are set back to the values read before, so a failed load leaves the
-  vehicle as it was (or says which parameters it could not restore).
+  vehicle as it was (or says which parameters it could not restore). The rig's read-only
+  parameters (:data:`READ_ONLY`: values it derives, such as MPC_THR_HOVER, which a saved file
+  holds as they were then) are left as the vehicle has them.
 
 Values are sent in the vehicle's type as floats (the cast encoding; the rig uses REAL32 for
 every parameter). Failures raise :class:`~gcs_tools.errors.OperationError`.
@@ -190,8 +192,18 @@ def _note_reason(msg, name: str, reasons: dict) -> None:
         reasons[key] = text
 
 
+def _read_only_names() -> frozenset:
+    from rig_emulator.link.parameters.table import DERIVED
+
+    return frozenset(DERIVED)
+
+
+READ_ONLY = _read_only_names()
+
+
 def load(client: ParamClient, lines: list[ParamLine], source: str, report=None) -> tuple[int, int]:
-    """Set every parameter of a parsed file; returns (set, already equal). See the module doc."""
+    """Set every parameter of a parsed file; returns (set, already equal or read-only). See the
+    module doc."""
     current = client.fetch_all()
     for ln in lines:  # the whole file against the vehicle before anything is sent
         if ln.name not in current:
@@ -203,7 +215,7 @@ def load(client: ParamClient, lines: list[ParamLine], source: str, report=None) 
     unchanged = 0
     for ln in lines:
         old = current[ln.name]
-        if same_value(old.value, ln.value, old.ptype):
+        if same_value(old.value, ln.value, old.ptype) or ln.name in READ_ONLY:
             unchanged += 1
             continue
         try:

@@ -6,6 +6,10 @@
 * ``rig-emulator params [--scenario NAME] [--controller MODULE:NAME]`` lists every parameter with its value, unit and
   range, a controller plug-in's own ones (``controller.params.NAME``) with their defaults.
 * ``rig-emulator scenarios`` lists the scenario and airframe presets.
+* ``rig-emulator divergence --scenario NAME --seed N`` runs a scenario on both plants and prints how
+  far the onboard position and the physics vehicle (SIM_STATE) part (docs/explanation/sim-state.md).
+* ``rig-emulator hover-thrust`` flies the rig in attitude mode and prints the normalised collective
+  thrust (SET_ATTITUDE_TARGET.thrust) that hovers, per plant (docs/how-to/attitude-thrust.md).
 * ``rig-emulator serve [--mavlink URL ...] [--speedup X] ...`` (also ``rig-emulator`` with no
   subcommand) runs the rig and serves MAVLink (see :mod:`rig_emulator.link.serve`).
 
@@ -351,6 +355,57 @@ def cmd_scenarios(args) -> int:
     return 0
 
 
+def cmd_divergence(args) -> int:
+    from rig_emulator.headless.divergence import format_row, run_stats
+
+    overrides = _overrides(args)
+    rows = []
+    with compile_notice():
+        for scenario in args.scenario:
+            for seed in args.seed or [0]:
+                for airframe in args.airframe or ["hilms", "hilms-ideal"]:
+                    stats, threshold, duration = run_stats(scenario, airframe, args.strategy, seed, args.duration,
+                                                           overrides, args.threshold, args.at)
+                    rows.append((scenario, airframe, seed, stats, threshold, duration))
+                    if not args.json:
+                        print(format_row(scenario, airframe, seed, stats, threshold), flush=True)
+    if args.json:
+        print(json.dumps([{"scenario": sc, "airframe": af, "seed": seed, "strategy": args.strategy, "duration_s": dur,
+                           "threshold_m": thr, "max_m": st.max_m, "rms_m": st.rms_m,
+                           "first_over_s": None if math.isnan(st.first_over_s) else st.first_over_s,
+                           "at_ned_m": {f"{t:g}": list(v) for t, v in st.at.items()},
+                           "slid_on_ground_m": {"onboard": st.slid_onboard_m, "sim_state": st.slid_physics_m},
+                           "sim_state_on_ground_s": st.grounded_physics_s}
+                          for sc, af, seed, st, thr, dur in rows]))
+    return 0
+
+
+def cmd_hover_thrust(args) -> int:
+    from rig_emulator.headless.hover_thrust import fly_fractions, format_measurement, format_trial, measure_hover_fraction
+
+    overrides = _overrides(args)
+    results = []
+    with compile_notice():
+        for airframe in args.airframe or ["hilms", "hilms-ideal"]:
+            if args.thrust:
+                trials = fly_fractions(airframe, args.thrust, seed=args.seed, overrides=overrides,
+                                       settle_s=args.settle, window_s=args.window)
+                results.append({"airframe": airframe, "seed": args.seed, "trials": [t.__dict__ for t in trials]})
+                if not args.json:
+                    print(f"{airframe} (seed {args.seed}, {args.settle:g} s hold at 2 m, then {args.window:g} s level "
+                          "at each thrust):")
+                    print("\n".join(format_trial(t, args.window) for t in trials), flush=True)
+                continue
+            m = measure_hover_fraction(airframe, seed=args.seed, overrides=overrides, settle_s=args.settle,
+                                       window_s=args.window)
+            results.append(m.as_dict())
+            if not args.json:
+                print(format_measurement(m), flush=True)
+    if args.json:
+        print(json.dumps(results))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rig-emulator", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -397,6 +452,34 @@ def build_parser() -> argparse.ArgumentParser:
                         "ranges and defaults); without it, those of the config's controller.plugin, if any")
     _add_config_args(p)
     p.set_defaults(func=cmd_params)
+
+    p = sub.add_parser("divergence", help="how far the onboard position and the physics vehicle (SIM_STATE) part "
+                                          "over a scenario, on both plants (docs/explanation/sim-state.md)")
+    p.add_argument("--scenario", action="append", required=True, help="scenario preset (repeatable)")
+    p.add_argument("--seed", type=int, action="append", help="seed (repeatable; default 0)")
+    p.add_argument("--strategy", default="smc-flc", choices=STRATEGIES)
+    p.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
+    p.add_argument("--airframe", action="append", help="plant (repeatable; default: hilms and hilms-ideal)")
+    p.add_argument("--threshold", type=float, help="report the first time they part by more than this (m; default "
+                                                   "estimation.divergence_warning_m)")
+    p.add_argument("--at", type=float, nargs="*", default=[30.0, 60.0], metavar="S",
+                   help="times (s) at which to print the vector (default: 30 60)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one parameter")
+    p.set_defaults(func=cmd_divergence)
+
+    p = sub.add_parser("hover-thrust", help="measure the normalised collective thrust (SET_ATTITUDE_TARGET.thrust) "
+                                            "that hovers, per plant (docs/how-to/attitude-thrust.md)")
+    p.add_argument("--airframe", action="append", help="plant (repeatable; default: hilms and hilms-ideal)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--settle", type=float, default=20.0, help="seconds of position hold at 2 m before the "
+                                                             "thrust is applied (default %(default)s)")
+    p.add_argument("--window", type=float, default=5.0, help="seconds flown at each thrust (default %(default)s)")
+    p.add_argument("--thrust", type=float, nargs="+", metavar="F",
+                   help="fly these thrusts (0..1) and print the climb of each, instead of searching the hover")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one parameter")
+    p.set_defaults(func=cmd_hover_thrust)
 
     p = sub.add_parser("scenarios", help="list scenario, airframe and strategy names")
     p.set_defaults(func=cmd_scenarios)

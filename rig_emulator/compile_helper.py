@@ -128,7 +128,7 @@ def loop_jobs(args: tuple) -> list:
     pos = x[0:3]  # the loop's pos and vel: x[0:3] or ss.onboard[0:3], both C-contiguous slices
     R = a["R"]
     calls = [  # the rigid body's callees (rk4_step and state_derivative are inlined into the loop)
-        (apply_ground, (x, a["pp"])),
+        (apply_ground, (x, a["pp"], f, f)),
         (quat_normalize, (x[6:10],)),
         (quat_derivative, (f, f, f, f, f, f, f, x[6:10])),
         (shock_torque, (f, a["shocks"])),

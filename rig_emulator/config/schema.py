@@ -112,6 +112,10 @@ SCHEMA: dict[str, Spec] = {
     "sim.duration": F("simulated time", "s", 0.0, 1e6, lo_open=True),
     "sim.seed": I("random seed (sensor noise, turn-on errors, gusts)", 0, 2**63 - 1),
     "sim.ground": Spec("bool", "virtual ground at Z = 0: the virtual position cannot go below it"),
+    "sim.ground_contact": S("what the virtual ground does to a vehicle standing on it (physics/ground.py): "
+                            "'hold' it keeps its place until its thrust lifts it (resting contact, the "
+                            "hardware rig), 'frictionless' a tilted thrust slides it (the ideal plant)",
+                            ("frictionless", "hold")),
     # --- airframe (Table 2) ------------------------------------------------------------
     "airframe.name": Spec("str", "airframe preset name", values="an airframe preset (chosen with --airframe)"),
     "airframe.mass": F("mass m (Table 2)", "kg", 0.0, 100.0, lo_open=True),
@@ -281,6 +285,10 @@ SCHEMA: dict[str, Spec] = {
     "estimation.tau_yaw": F("complementary filter: time constant of the magnetometer heading correction", "s", 0.0, 1e3, lo_open=True),
     "estimation.accel_lowpass_hz": F("low-pass on the accelerometers before the tilt correction", "Hz", 0.0, 1e3, lo_open=True),
     "estimation.iir_cutoff_hz": F("cut-off of the load cells' IIR low-pass", "Hz", 0.0, 1e3, lo_open=True),
+    "estimation.divergence_warning_m": F("divergence report threshold: the served rig says once (console and "
+                                         "STATUSTEXT) when its onboard virtual position and the physics vehicle "
+                                         "(SIM_STATE) part by more than this, again only after they came back within "
+                                         "half of it (docs/explanation/sim-state.md); 0 = never", "m", 0.0, 1e6),
     "sensor_models.mpu6050": Spec("tree", "overrides of presets/sensors/mpu6050.toml (datasheet figures)"),
     "sensor_models.hmc5883l": Spec("tree", "overrides of presets/sensors/hmc5883l.toml"),
     "sensor_models.imu_array": Spec("tree", "overrides of presets/sensors/imu_array.toml (mounting, rates, site field)"),

@@ -41,6 +41,8 @@ from rig_emulator.link.commands.flight_control import FlightControl
 from rig_emulator.link.commands.gcs_loss import GcsLoss
 from rig_emulator.link.endpoints.counters import LinkCounters
 from rig_emulator.link.endpoints.sockets import Endpoint, open_endpoint
+from rig_emulator.headless.divergence import DivergenceWatch
+from rig_emulator.headless.hover_thrust import HoverThrustEstimate
 from rig_emulator.link.telemetry.fault_report import FaultReporter
 from rig_emulator.link.ftp.component_metadata import metadata_files
 from rig_emulator.link.commands.flight_monitors import FenceMonitor, OffboardLossMonitor
@@ -97,6 +99,8 @@ class RigServer:
         self.ctx.mission = self.mission
         self.mission_transfer = MissionTransfer(self, self.mission)
         self.fault_reporter = FaultReporter()
+        self.divergence = DivergenceWatch()  # onboard position vs SIM_STATE (headless/divergence.py)
+        self.hover_thrust = HoverThrustEstimate()  # MPC_THR_HOVER (headless/hover_thrust.py)
         self.offboard = OffboardSetpoints(self)
         self.offboard_loss = OffboardLossMonitor(self, self.offboard)
         self.fence = FenceMonitor(self)
@@ -326,6 +330,7 @@ class RigServer:
         self.flight.reset()
         self.mission.after_reboot()
         self.fault_reporter = FaultReporter()
+        self.hover_thrust = HoverThrustEstimate()  # the thrust loop's correction starts afresh
         self._snap = None
         self.clock_rebase = True
         for ch in self.channels.values():
@@ -356,7 +361,7 @@ class RigServer:
 
     # --- the loop ------------------------------------------------------------------------------------
     def step_chunk(self) -> None:
-        self.rig.step(self.chunk_steps)
+        self.hover_thrust.update(self.rig.step(self.chunk_steps), self.rig)
         self.counters.steps += self.chunk_steps
         self._snap = None
         self.mission.poll()
@@ -364,6 +369,9 @@ class RigServer:
         self.fence.poll()
         self.flight.poll(self.snapshot)
         self.report_faults()
+        text = self.divergence.poll(self.rig)
+        if text is not None:
+            self.statustext(None, M.MAV_SEVERITY_NOTICE, text)
         self.console.poll(self.rig.time_s, self.rig.armed, self.modes.main, self.modes.sub)
 
     def report_faults(self) -> None:

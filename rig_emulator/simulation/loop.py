@@ -115,7 +115,7 @@ def run_steps(
                 fwx, fwy, fwz = wind_force(t, wind, gusts)
                 u1_meas = ss.thrust_est[0] + ss.thrust_est[1] + ss.thrust_est[2] + ss.thrust_est[3]
                 onboard_translation_step(ctrl_dt, ss.att_est[0], ss.att_est[1], ss.att_est[2], u1_meas,
-                                         pp.mass, pp.g, fwx, fwy, fwz, pp.ground, ss.onboard)
+                                         pp.mass, pp.g, fwx, fwy, fwz, pp.ground, pp.ground_hold, ss.onboard)
             if sp.estimated:
                 phi = ss.att_est[0]
                 theta = ss.att_est[1]

@@ -25,6 +25,8 @@ from rig_emulator.physics.motors import GRAM_FORCE_N
 PhysicsParams = namedtuple(
     "PhysicsParams",
     "mass ixx iyy izz arm_length rotor_inertia km_over_kf g k_v f_ceiling v_max tau_motor kf ground "
+    # ground_hold: sim.ground_contact == "hold", the virtual ground's resting contact (physics/ground.py)
+    "ground_hold "
     # thrust_efficiency: (4,) share of Eq. 40's thrust each motor produces (motor faults);
     # hw: HardwareParams, the real rig's effects (issue 13, physics/hardware.py)
     "thrust_efficiency hw",
@@ -150,6 +152,7 @@ def physics_params(cfg: RigConfig, thrust_efficiency: np.ndarray | None = None,
         tau_motor=cfg["motors.time_constant"],
         kf=cfg["motors.kf"],
         ground=bool(cfg["sim.ground"]),
+        ground_hold=cfg["sim.ground_contact"] == "hold",
         thrust_efficiency=np.ones(4) if thrust_efficiency is None else thrust_efficiency,
         hw=hardware_params(cfg, k_v, 1.0 / cfg["sim.physics_rate_hz"], previous_hw),
     )

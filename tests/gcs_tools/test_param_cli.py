@@ -50,3 +50,16 @@ def test_rejected_set_prints_its_reason_once(rig, capsys):
     assert f"SMC_K_PHI: the vehicle rejected 1e+09 and kept {before:g}" in err
     assert err.count("must be in [0, 10000]") == 1, err
     assert rig.server.rig.cfg["smc.k"][0] == before
+
+
+def test_a_read_only_parameter_is_refused_by_set_and_left_by_load(rig, capsys, tmp_path):
+    """MPC_THR_HOVER is derived by the rig: a set is refused with the reason; a file that holds another
+    value of it (saved after another flight) loads without touching it."""
+    url = client_url(rig.tcp_url)
+    assert main(["param", "set", url, "MPC_THR_HOVER", "0.5", "--timeout", "0.5", "--retries", "1"]) == 1
+    assert "read-only" in capsys.readouterr().err
+    f = tmp_path / "hover.parm"
+    f.write_text("MPC_THR_HOVER 0.5\nEST_TAU_YAW 2.5\n")
+    assert main(["param", "load", url, str(f)]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"loaded {f}: 1 set, 1 already equal"
+    assert rig.server.rig.cfg["estimation.tau_yaw"] == 2.5

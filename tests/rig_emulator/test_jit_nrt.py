@@ -14,7 +14,7 @@ from rig_emulator.control import allocation, controller, fuzzy, pid, reference_f
 from rig_emulator.estimation import (attitude_pipeline, complementary, ensemble, imu_calibration, load_cell_filter,
                                      onboard_position)
 from rig_emulator.guidance import runner, trajectories
-from rig_emulator.physics import disturbances, integrator, rigid_body, rotation
+from rig_emulator.physics import disturbances, ground, integrator, rigid_body, rotation
 from rig_emulator.sensors import imu_module, sensor_step
 from rig_emulator.simulation import loop, rng_bits
 from rig_emulator.simulation.run import Simulation
@@ -78,7 +78,7 @@ STEP_LOOP = (
     # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step and control_update's stages are
     # inline="always" (a call passed their namedtuples field by field every step or control step,
     # benchmarks/README.md)
-    integrator.apply_ground,
+    integrator.apply_ground, ground.hold_on_ground,
     disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
     rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
     controller.control_update,

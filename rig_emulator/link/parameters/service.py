@@ -11,6 +11,8 @@
 * A controller plug-in's own parameters (:mod:`.plugin_params`) are in the table after the
   rig's when the server's table was built with the plug-in; they are validated by the
   plug-in's rules and stored under its name.
+* A derived parameter (:class:`~rig_emulator.link.parameters.table.DerivedParam`, e.g.
+  MPC_THR_HOVER) is read from the running rig; a PARAM_SET of it is refused with the reason.
 """
 
 from __future__ import annotations
@@ -31,8 +33,9 @@ class ParamService:
         self.rejected = 0
 
     def value_message(self, p: Param):
+        value = p.value_of(self.rig, self.out) if getattr(p, "read_only", False) else p.value(self.rig.cfg)
         return mavlink.MAVLink_param_value_message(
-            param_id=p.name.encode("ascii"), param_value=as_float32(p.value(self.rig.cfg)),
+            param_id=p.name.encode("ascii"), param_value=as_float32(value),
             param_type=mavlink.MAV_PARAM_TYPE_REAL32, param_count=len(self.table), param_index=p.index)
 
     def request_list(self, msg, channel) -> None:
@@ -52,6 +55,11 @@ class ParamService:
         if p is None:
             self.rejected += 1
             self.out.statustext(channel, mavlink.MAV_SEVERITY_WARNING, f"no parameter {msg.param_id!r}")
+            return
+        if getattr(p, "read_only", False):
+            self.rejected += 1
+            self.out.reply(channel, self.value_message(p))
+            self.out.statustext(channel, mavlink.MAV_SEVERITY_ERROR, f"{p.name} rejected: {p.name} is read-only")
             return
         old = self.rig.cfg[p.key]
         try:

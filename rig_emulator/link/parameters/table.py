@@ -16,6 +16,12 @@ elements, by the key's element suffix (``_PHI``/``_THE``/``_PSI`` for attitude a
 
 Keys in :data:`EXCLUDED` are not parameters of a running rig, for the reason given. A
 schema key in neither table is not served (:func:`unmapped_keys`; a test keeps it empty).
+
+After the schema's parameters come the read-only ones the rig derives (:data:`DERIVED`, each a
+:class:`DerivedParam`): ``MPC_THR_HOVER``, PX4's hover throttle, the normalised collective
+thrust (SET_ATTITUDE_TARGET.thrust) that carries the weight
+(:class:`rig_emulator.headless.hover_thrust.HoverThrustEstimate`; docs/how-to/attitude-thrust.md).
+A PARAM_SET of one is refused with the reason.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "sim.control_rate_hz": ("SIM_CTRL_HZ", None),
     "sim.log_rate_hz": ("SIM_LOG_HZ", None),
     "sim.ground": ("SIM_GROUND", None),
+    "sim.ground_contact": ("SIM_GND_CONTACT", None),
     "airframe.mass": ("AF_MASS", None),
     "airframe.ixx": ("AF_IXX", None),
     "airframe.iyy": ("AF_IYY", None),
@@ -114,6 +121,7 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "estimation.tau_yaw": ("EST_TAU_YAW", None),
     "estimation.accel_lowpass_hz": ("EST_ACC_LP_HZ", None),
     "estimation.iir_cutoff_hz": ("EST_IIR_HZ", None),
+    "estimation.divergence_warning_m": ("EST_DIV_WARN", None),
     "health.update_rate_hz": ("HLT_RATE_HZ", None),
     "health.reject_window": ("HLT_REJ_WIN", None),
     "health.accel_tolerance": ("HLT_ACC_TOL", None),
@@ -230,6 +238,61 @@ class Param:
         return self.spec.unit
 
 
+def _nominal_hover_fraction(cfg) -> float:
+    """m g / u1_max with the controllers' Eq. 40 (what hovers when the motors follow Eq. 40)."""
+    from rig_emulator.physics.motors import GRAM_FORCE_N
+
+    k_v = cfg["motors.thrust_per_volt_grf"] * GRAM_FORCE_N * cfg["controller_model.thrust_per_volt_scale"]
+    f_max = min(cfg["motors.thrust_ceiling_grf"] * GRAM_FORCE_N, k_v * cfg["motors.voltage_max"])
+    return min(1.0, cfg["airframe.mass"] * cfg["airframe.gravity"] / (4.0 * f_max))
+
+
+def _hover_fraction(server) -> float:
+    return server.hover_thrust.value(server.rig)
+
+
+@dataclass(frozen=True)
+class DerivedParam:
+    """A read-only parameter the served rig derives (no config key): ``live(server)`` is its value
+    on a running :class:`~rig_emulator.link.server.RigServer`, ``nominal(cfg)`` the value a
+    configuration implies before it runs (the parameter metadata's default and a listing's value)."""
+
+    index: int
+    name: str
+    key: str  # a name for listings, not a config key
+    spec: Spec
+    live: object
+    nominal: object
+    element = None
+    read_only = True
+
+    def value(self, cfg) -> float:
+        return float(self.nominal(cfg))
+
+    def value_of(self, rig, server=None) -> float:
+        """The value a ground station reads from the running ``rig`` served by ``server``."""
+        return float(self.live(server)) if hasattr(server, "hover_thrust") else self.value(rig.cfg)
+
+    def to_config(self, value: float, cfg):
+        raise ValueError(f"{self.name} is read-only: the rig derives it ({self.spec.doc.split(';')[0]})")
+
+    @property
+    def unit(self) -> str:
+        return self.spec.unit
+
+
+#: name -> (listing key, spec, live value of a RigServer, nominal value of a config)
+DERIVED: dict[str, tuple] = {
+    "MPC_THR_HOVER": ("derived.hover_thrust",
+                      Spec("float", "hover thrust: the normalised collective thrust (SET_ATTITUDE_TARGET.thrust, "
+                                    "0..1 of the four motors' largest) that carries the weight (PX4's hover "
+                                    "throttle); read-only, learnt in steady position-controlled flight, before "
+                                    "that derived from the thrust chain (docs/how-to/attitude-thrust.md)",
+                           "", 0.0, 1.0),
+                      _hover_fraction, _nominal_hover_fraction),
+}
+
+
 def unmapped_keys() -> list[str]:
     """Schema keys neither named nor excluded: not served until added to SHORT_NAMES or EXCLUDED."""
     return [k for k in SCHEMA if k not in SHORT_NAMES and k not in EXCLUDED]
@@ -247,6 +310,8 @@ def build_table() -> list[Param]:
         else:
             for i, suffix in enumerate(suffixes):
                 table.append(Param(len(table), base + suffix, key, i, spec))
+    for name, (key, spec, live, nominal) in DERIVED.items():
+        table.append(DerivedParam(len(table), name, key, spec, live, nominal))
     return table
 
 

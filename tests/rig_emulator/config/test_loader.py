@@ -105,7 +105,10 @@ def test_hilms_is_hilms_ideal_plus_its_hardware_preset():
     """Issue 13: the default airframe is the hardware rig; ``hilms-ideal`` has every effect neutral."""
     hw, ideal = load_config("hilms"), load_config("hilms-ideal")
     differ = {k for k in SCHEMA if hw[k] != ideal[k]}
-    assert differ and all(not k.startswith(("airframe.", "sim.", "guidance.")) for k in differ - {"airframe.name"})
+    # the virtual ground's resting contact is a reading of the hardware rig (physics/ground.py), kept beside sim.ground
+    assert hw["sim.ground_contact"] == "hold" and ideal["sim.ground_contact"] == "frictionless"
+    assert differ and all(not k.startswith(("airframe.", "sim.", "guidance."))
+                          for k in differ - {"airframe.name", "sim.ground_contact"})
     assert ideal["joint.viscous"] == [0.0, 0.0, 0.0] and ideal["smc.gain_reading"] == "si"
     assert ideal["motors.curve_exponent"] == 1.0 and ideal["control.actuation_delay"] == 0.0
     assert load_config()["airframe.name"] == "hilms"

@@ -159,8 +159,23 @@ def test_vehicle_with_stopped_motors_rests_on_the_ground():
     x = _state()
     x[S.POS + 2] = -0.01
     x[S.VEL : S.VEL + 3] = [2.0, -1.0, -3.0]
-    apply_ground(x, pp)  # hover thrust: frictionless ground, the vehicle slides
+    apply_ground(x, pp, 0.5, 0.5)  # hover thrust: frictionless ground, the vehicle slides
     assert x[S.POS + 2] == 0.0 and list(x[S.VEL : S.VEL + 3]) == [2.0, -1.0, 0.0]
     x[S.MOTOR_V : S.MOTOR_V + 4] = 0.0
-    apply_ground(x, pp)
+    apply_ground(x, pp, 0.5, 0.5)
     assert list(x[S.VEL : S.VEL + 3]) == [0.0, 0.0, 0.0]
+
+
+def test_the_hardware_rigs_ground_holds_a_vehicle_standing_on_it_at_any_thrust():
+    """sim.ground_contact = "hold" (physics/ground.py): on the ground at hover thrust the vehicle keeps
+    the place it had at the start of the step and loses its horizontal velocity; above the ground the
+    rule does nothing."""
+    from rig_emulator.physics.integrator import apply_ground
+
+    pp = physics_params(load_config("hilms"))
+    assert pp.ground_hold and not physics_params(load_config("hilms-ideal")).ground_hold
+    x = _state()
+    x[S.POS : S.POS + 3] = [0.3, -0.2, -0.01]
+    x[S.VEL : S.VEL + 3] = [2.0, -1.0, -3.0]
+    apply_ground(x, pp, 0.25, -0.15)
+    assert list(x[S.POS : S.POS + 3]) == [0.25, -0.15, 0.0] and list(x[S.VEL : S.VEL + 3]) == [0.0, 0.0, 0.0]
