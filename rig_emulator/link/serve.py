@@ -105,6 +105,16 @@ def cmd_serve(args, overrides: dict) -> int:
             state.close()
 
 
+def default_endpoints(args) -> list[str]:
+    """The ground link's endpoints when ``--mavlink`` is not given: the instance's, or with
+    ``--ardupilot-json`` one TCP port beside ArduPilot SITL's (which listens on 5760 + 10 N itself)."""
+    if getattr(args, "ardupilot_json", None) is not None:
+        from rig_emulator.link.ardupilot_json.serve_ardupilot import ground_endpoints
+
+        return ground_endpoints(args.instance)
+    return instance_endpoints(args.instance)
+
+
 def _log(text: str) -> None:
     print(f"rig-emulator: {text}", flush=True)
 
@@ -147,7 +157,7 @@ def _build_server(args, overrides: dict, state, signing, endpoints):
 
 def _serve(args, overrides: dict, state, signing) -> int:
     t_start = time.monotonic()
-    endpoints = _open_endpoints(args.mavlink or instance_endpoints(args.instance))
+    endpoints = _open_endpoints(args.mavlink or default_endpoints(args))
     boot = BootLink(endpoints, sysid=args.sysid).start()
     for ep in endpoints:
         print(f"rig-emulator: serving {ep.url}", flush=True)

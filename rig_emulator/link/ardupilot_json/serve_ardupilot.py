@@ -10,6 +10,9 @@ from rig_emulator.config.loader import ConfigError
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 9002  # ArduPilot SIM_JSON's control port; + 10 N for SITL's -I N
 INSTANCE_PORT_STEP = 10
+#: the rig's ground link with --ardupilot-json and no --mavlink (+ 10 N with --instance N): ArduPilot SITL
+#: listens on TCP 5760 (+ 10 N) itself, and sends its own telemetry to ground stations on UDP 14550
+GROUND_TCP_PORT = 5790
 #: ArduCopter's parameters for the rig (frame, motor routing, thrust curve): ``--defaults``
 PARAM_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "hilms.parm")
 
@@ -21,11 +24,17 @@ def add_ardupilot_args(p: argparse.ArgumentParser) -> None:
                    help=f"be the physics of ArduPilot SITL started with --model JSON:HOST: answer its servo "
                         f"packets on UDP (default {DEFAULT_HOST}:{DEFAULT_PORT}, + 10 N with --instance N, as "
                         f"SITL's -I N) with the rig's state as JSON, one plant step per new frame. The rig's own "
-                        f"controllers are off; --mavlink endpoints keep serving the rig's telemetry. ArduCopter "
+                        f"controllers are off; --mavlink endpoints keep serving the rig's telemetry (default "
+                        f"tcpin:127.0.0.1:{GROUND_TCP_PORT} + 10 N: SITL itself listens on 5760 + 10 N). ArduCopter "
                         f"needs the rig's frame and motor routing: --defaults ...,{PARAM_FILE}")
     g.add_argument("--ardupilot-rate", type=float, default=None, metavar="HZ",
                    help="the plant's step per ArduPilot frame, a divisor of the physics rate (default: the physics "
                         "rate, 1000 Hz: one physics step per frame)")
+
+
+def ground_endpoints(instance: int = 0) -> list[str]:
+    """The rig's ground link beside ArduPilot SITL ``-I instance`` when ``--mavlink`` is not given."""
+    return [f"tcpin:127.0.0.1:{GROUND_TCP_PORT + INSTANCE_PORT_STEP * instance}"]
 
 
 def parse_spec(text: str, instance: int = 0) -> tuple[str, int]:

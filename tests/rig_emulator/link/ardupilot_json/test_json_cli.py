@@ -11,7 +11,7 @@ import time
 import pytest
 
 from gcs_tools.ardupilot_peer import JsonLink, fly
-from rig_emulator.link.ardupilot_json.serve_ardupilot import PARAM_FILE, parse_spec
+from rig_emulator.link.ardupilot_json.serve_ardupilot import PARAM_FILE, ground_endpoints, parse_spec
 from rig_emulator.testing.rig import START_TIMEOUT_S, RigProcess
 
 
@@ -52,6 +52,8 @@ def test_default_port_follows_the_instance():
     assert parse_spec("", 0) == ("127.0.0.1", 9002)
     assert parse_spec("", 2) == ("127.0.0.1", 9022)  # SITL -I 2 sends to 9022
     assert parse_spec("0.0.0.0:9100", 2) == ("0.0.0.0", 9100)
+    # the rig's own ground link moves off ArduPilot SITL's TCP 5760 + 10 N when none is given
+    assert ground_endpoints(0) == ["tcpin:127.0.0.1:5790"] and ground_endpoints(2) == ["tcpin:127.0.0.1:5810"]
 
 
 @pytest.mark.parametrize("args,message", [
