@@ -26,8 +26,10 @@ agrees with the GPS velocity ArduPilot's EKF fuses.
 The parser on the other side is ``strstr`` and ``sscanf("[%f, %f, %f]")`` after skipping
 ``"key":``, not a JSON parser: the line must be compact (no space after a colon), each key
 must appear once and no key may hold another's name. The line is framed by newlines
-(``"\\n{...}\\n"``; ArduPilot takes the last whole line it has). Floats are Python's shortest
-round-trip form (``repr``), which ``atof`` and ``%f`` read back to the same value; a value
+(``"\\n{...}\\n"``; ArduPilot takes the last whole line it has). ``timestamp`` and ``position``,
+which ArduPilot reads as doubles, are written in Python's shortest round-trip form (``repr``),
+the rest (read as floats) with 9 significant digits, which ``%f`` reads back within one unit
+in the last place of a float of the double itself (and three times cheaper to write); a value
 that is not finite (a diverged plant) is written as JSON's ``NaN`` / ``Infinity``, which they
 read as well.
 """
@@ -36,8 +38,9 @@ from __future__ import annotations
 
 from protocol.frames import enu_to_ned_xyz, mavlink_quaternion_from_quat_wb
 
-_LINE = ('\n{"timestamp":%r,"imu":{"gyro":[%r,%r,%r],"accel_body":[%r,%r,%r]},'
-         '"position":[%r,%r,%r],"velocity":[%r,%r,%r],"quaternion":[%r,%r,%r,%r]}\n')
+#: ``timestamp`` and ``position`` are doubles in ArduPilot (``%r``), the others floats (``%.9g``)
+_LINE = ('\n{"timestamp":%r,"imu":{"gyro":[%.9g,%.9g,%.9g],"accel_body":[%.9g,%.9g,%.9g]},'
+         '"position":[%r,%r,%r],"velocity":[%.9g,%.9g,%.9g],"quaternion":[%.9g,%.9g,%.9g,%.9g]}\n')
 
 
 def state_line(readout) -> bytes:

@@ -9,6 +9,7 @@ import math
 import random
 import struct
 
+import numpy as np
 import pytest
 
 from gcs_tools.ardupilot_peer import QUAT_ATT, SitlClock, parse_sensors, servo_packet as stand_in_packet
@@ -66,13 +67,15 @@ def test_the_answer_is_read_back_by_ardupilots_parser():
         mask, values = parse_sensors(text.strip("\n"))
         assert mask & 0b1001111 == 0b1001111 and mask & QUAT_ATT, mask  # every required key, and the quaternion
         assert values["timestamp"] == r.time_s == obj["timestamp"]  # the same double, not a rounded one
-        assert values["imu.gyro"] == pytest.approx(r.gyro, rel=1e-6)
-        assert values["imu.accel_body"] == pytest.approx(r.accel, rel=1e-6)
+        # what ArduPilot reads into floats: within a float's last place of the rig's double
+        for got, sent in ((values["imu.gyro"], r.gyro), (values["imu.accel_body"], r.accel),
+                          (values["quaternion"], mavlink_quaternion_from_quat_wb(r.quaternion))):
+            assert all(abs(np.float32(g) - np.float32(s)) <= abs(np.spacing(np.float32(s))) for g, s in zip(got, sent))
         e, n, u = r.position
         assert obj["position"] == [n, e, -u]  # NED from home
         ve, vn, vu = r.velocity
-        assert obj["velocity"] == [vn, ve, -vu]
-        assert obj["quaternion"] == list(mavlink_quaternion_from_quat_wb(r.quaternion))
+        assert obj["velocity"] == pytest.approx([vn, ve, -vu], rel=1e-8, abs=1e-12)
+        assert obj["position"] == values["position"]  # a double in ArduPilot: exact
 
 
 def test_a_space_after_a_colon_would_break_ardupilots_parser():
