@@ -6,7 +6,6 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 
@@ -15,19 +14,9 @@ from rig_emulator.link.ardupilot_json.serve_ardupilot import PARAM_FILE, ground_
 from rig_emulator.testing.rig import START_TIMEOUT_S, RigProcess
 
 
-def _wait_line(rig, prefix: str, timeout: float = 60.0) -> str | None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        for line in list(rig.output):
-            if line.startswith(prefix):
-                return line
-        time.sleep(0.02)
-    return None
-
-
 def test_serve_ardupilot_json_process():
     with RigProcess(speedup=1, args=["--ardupilot-json", "127.0.0.1:0", "--no-persist"]) as rig:
-        line = _wait_line(rig, "rig-emulator: ardupilot json physics on udp:127.0.0.1:")
+        line = rig.wait_line("rig-emulator: ardupilot json physics on udp:127.0.0.1:")
         assert line is not None, rig.output
         assert PARAM_FILE in line
         port = int(line.split("udp:127.0.0.1:", 1)[1].split()[0])
@@ -35,7 +24,7 @@ def test_serve_ardupilot_json_process():
         log = fly(link, 1.0)
         link.close()
         assert log.frames == 1001 and link.clock.advances == 1001
-        assert _wait_line(rig, "rig-emulator: ArduPilot at udp:127.0.0.1:") is not None
+        assert rig.wait_line("rig-emulator: ArduPilot at udp:127.0.0.1:") is not None
         assert rig.stop(signal.SIGINT) == 0
         assert any(line.startswith("rig-emulator: stopped at t = 1.001") for line in rig.output), rig.output
 
