@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.link.boot import BootLink
 from rig_emulator.link.endpoints.sockets import EndpointError, open_endpoint
+from rig_emulator.link.ardupilot_json.serve_ardupilot import check_ardupilot_args
 from rig_emulator.link.px4_simulator.serve_px4 import check_px4_args
 from rig_emulator.link.serve_args import DEFAULT_ENDPOINTS
 from rig_emulator.link.serve_args import MAX_INSTANCE, instance_endpoints, instance_sysid, instance_state_dir
@@ -94,6 +95,7 @@ def cmd_serve(args, overrides: dict) -> int:
     if args.timing_log and not os.path.isdir(os.path.dirname(os.path.abspath(args.timing_log))):
         raise ConfigError(f"--timing-log {args.timing_log}: its directory does not exist")
     check_px4_args(args)
+    check_ardupilot_args(args)
     key, key_source = signing_key_from_args(args, _log)
     state = open_state(args, args.home)
     try:
@@ -101,6 +103,16 @@ def cmd_serve(args, overrides: dict) -> int:
     finally:
         if state is not None:
             state.close()
+
+
+def default_endpoints(args) -> list[str]:
+    """The ground link's endpoints when ``--mavlink`` is not given: the instance's, or with
+    ``--ardupilot-json`` one TCP port beside ArduPilot SITL's (which listens on 5760 + 10 N itself)."""
+    if getattr(args, "ardupilot_json", None) is not None:
+        from rig_emulator.link.ardupilot_json.serve_ardupilot import ground_endpoints
+
+        return ground_endpoints(args.instance)
+    return instance_endpoints(args.instance)
 
 
 def _log(text: str) -> None:
@@ -145,7 +157,7 @@ def _build_server(args, overrides: dict, state, signing, endpoints):
 
 def _serve(args, overrides: dict, state, signing) -> int:
     t_start = time.monotonic()
-    endpoints = _open_endpoints(args.mavlink or instance_endpoints(args.instance))
+    endpoints = _open_endpoints(args.mavlink or default_endpoints(args))
     boot = BootLink(endpoints, sysid=args.sysid).start()
     for ep in endpoints:
         print(f"rig-emulator: serving {ep.url}", flush=True)
@@ -165,18 +177,23 @@ def _serve(args, overrides: dict, state, signing) -> int:
 
         server.timing = LoopTiming(server.chunk_s, args.speedup)
     runner = server
-    if getattr(args, "px4_simulator", None):  # issue 16: the flight stack steps the plant (px4_simulator/)
-        from rig_emulator.link.px4_simulator.serve_px4 import serve_px4
+    try:  # a flight stack steps the plant (px4_simulator/, ardupilot_json/)
+        if getattr(args, "px4_simulator", None):
+            from rig_emulator.link.px4_simulator.serve_px4 import serve_px4
 
-        try:
             runner = serve_px4(args, server, rig, _log)
-        except ConfigError:
-            server.close()
-            raise
+            print(f"rig-emulator: px4 simulator on {runner.transport.url}", flush=True)
+        elif getattr(args, "ardupilot_json", None) is not None:
+            from rig_emulator.link.ardupilot_json.serve_ardupilot import PARAM_FILE, serve_ardupilot
+
+            runner = serve_ardupilot(args, server, rig, _log)
+            print(f"rig-emulator: ardupilot json physics on {runner.url} (ArduCopter: --model JSON:HOST "
+                  f"--defaults ...,{PARAM_FILE})", flush=True)
+    except ConfigError:
+        server.close()
+        raise
     previous = {s: signal.signal(s, lambda *_: runner.stop()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
-        if runner is not server:
-            print(f"rig-emulator: px4 simulator on {runner.transport.url}", flush=True)
         runner.run(args.duration)
     finally:
         if runner is not server:

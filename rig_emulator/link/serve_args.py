@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from protocol.geodesy import Home
+from rig_emulator.link.ardupilot_json.serve_ardupilot import add_ardupilot_args
 from rig_emulator.link.px4_simulator.serve_px4 import add_px4_args
 
 DEFAULT_ENDPOINTS = ("udpout:127.0.0.1:14550", "tcpin:127.0.0.1:5760")
@@ -87,4 +88,5 @@ def add_serve_args(p: argparse.ArgumentParser) -> None:
                         "be signed with the key (RADIO_STATUS excepted), else it is dropped and counted. "
                         "Other users can see command lines: prefer --signing-key-file")
     g.add_argument("--signing-key-file", metavar="PATH", help="a file whose first line is the KEY of --signing-key")
-    add_px4_args(p)  # issue 16: a flight stack in the loop
+    add_px4_args(p)  # a flight stack in the loop: PX4's Simulator MAVLink API
+    add_ardupilot_args(p)  # or ArduPilot's JSON simulator interface

@@ -329,16 +329,20 @@ class RigServer:
         self.rig.reboot()
         self.flight.reset()
         self.mission.after_reboot()
-        self.fault_reporter = FaultReporter()
         self.hover_thrust = HoverThrustEstimate()  # the thrust loop's correction starts afresh
-        self._snap = None
+        self.clock_restarted(t_old)
         self.clock_rebase = True
-        for ch in self.channels.values():
-            nd = ch.schedule.next_due
-            for msg_id in nd:
-                nd[msg_id] = max(0.0, nd[msg_id] - t_old)
         self.heartbeat_pending = True
         self.console.line(self.rig.time_s, "rebooted")
+
+    def clock_restarted(self, t_old: float) -> None:
+        """The simulation restarted from simulated time ``t_old`` at 0 (a reboot, a flight stack's
+        new session): every peer's streams move back with the clock, keeping their phase, and the
+        fault report starts again from the new simulation's faults."""
+        self.fault_reporter = FaultReporter()
+        self._snap = None
+        for ch in self.channels.values():
+            ch.schedule.clock_restarted(t_old, self.rig.time_s)
 
     def _request_data_stream(self, msg, channel: Channel) -> None:
         hz = float(msg.req_message_rate) if msg.start_stop else 0.0

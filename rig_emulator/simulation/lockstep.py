@@ -30,11 +30,11 @@ LOCKSTEP_OVERRIDES = {"failsafe.action": "report"}
 
 
 class LockstepPlant:
-    def __init__(self, rig, rate_hz: float, home_alt_m: float):
+    def __init__(self, rig, rate_hz: float, home_alt_m: float, rate_option: str = "--px4-rate"):
         physics_hz = rig.cfg["sim.physics_rate_hz"]
         ratio = physics_hz / rate_hz if rate_hz > 0 else 0.0
         if not (rate_hz > 0 and abs(ratio - round(ratio)) < 1e-9 and round(ratio) >= 1):
-            raise ConfigError(f"--px4-rate {rate_hz:g}: must divide the physics rate "
+            raise ConfigError(f"{rate_option} {rate_hz:g}: must divide the physics rate "
                               f"(sim.physics_rate_hz = {physics_hz:g}), e.g. 250, 500 or 1000")
         self.rig = rig
         self.rate_hz = float(rate_hz)

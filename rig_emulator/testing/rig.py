@@ -268,6 +268,17 @@ class RigProcess(_RigBase):
             if line.startswith("rig-emulator: ready"):
                 self.ready = True
 
+    def wait_line(self, prefix: str, timeout: float = 60.0) -> str | None:
+        """The first line of the rig's output starting with ``prefix``, once it is there (None after
+        ``timeout``: a bound, not a measure)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for line in list(self.output):
+                if line.startswith(prefix):
+                    return line
+            time.sleep(0.02)
+        return None
+
     def _pump(self) -> None:
         for line in self.proc.stdout:
             self.output.append(line.rstrip("\n"))

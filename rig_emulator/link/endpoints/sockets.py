@@ -222,6 +222,15 @@ class _Tcp(Endpoint):
     def __init__(self, spec: str):
         super().__init__(spec)
         self.clients: dict = {}
+        self._lost: list = []  # clients a flush found broken, reported 'closed' by the next poll
+
+    def _report_lost(self, events: list) -> None:
+        """'closed' for the clients a flush dropped (first in a poll: a client reconnecting under
+        the same key opens after it). Without this the server would keep their channels and
+        count everything it queued for them as dropped (``tx_overflow``), session after session."""
+        if self._lost:
+            events.extend(("closed", key, b"") for key in self._lost)
+            self._lost = []
 
     def _read_clients(self, events: list) -> None:
         for key, client in list(self.clients.items()):
@@ -258,8 +267,9 @@ class _Tcp(Endpoint):
                 n = client.sock.send(client.tx)
             except (BlockingIOError, InterruptedError):
                 continue
-            except OSError:
+            except OSError:  # the ground station is gone (reset, broken pipe)
                 self._drop(key)
+                self._lost.append(key)
                 continue
             del client.tx[:n]
 
@@ -291,6 +301,7 @@ class TcpIn(_Tcp):
 
     def poll(self) -> list[tuple]:
         events = []
+        self._report_lost(events)
         while True:
             try:
                 sock, addr = self._sock.accept()
@@ -348,6 +359,7 @@ class TcpOut(_Tcp):
 
     def poll(self) -> list[tuple]:
         events = []
+        self._report_lost(events)
         if not self.clients:
             self._try_connect(events)
         self._read_clients(events)

@@ -3,12 +3,8 @@ with the ground link still served.
 
 One loop, one thread: it waits (``select``) on the flight stack's stream, the listening
 socket and the ground link's sockets. The flight stack's messages step the plant
-(:mod:`rig_emulator.link.px4_simulator.session`); the ground link
-(:class:`~rig_emulator.link.server.RigServer`: HEARTBEAT, the rig's own telemetry and load
-cells, parameters, commands) is serviced between steps at most every
-``GROUND_PERIOD_S`` of wall-clock time, or at once when a ground station sent something.
-Its streams are scheduled in simulated time as always; a plant stepped at 10x real time
-thins them to one message per service (as ``--speedup max`` does).
+(:mod:`rig_emulator.link.px4_simulator.session`); the ground link is serviced between steps
+(:mod:`rig_emulator.link.ground_beside`).
 
 The rig's own controllers do not run in this mode: the flight stack drives the motors.
 """
@@ -19,14 +15,14 @@ import math
 import select
 import time
 
+from rig_emulator.link.ground_beside import GroundBeside
 from rig_emulator.link.px4_simulator.session import SimulatorSession
-
-GROUND_PERIOD_S = 0.01
 
 
 class Px4SimulatorServer:
     def __init__(self, ground, transport, plant, home, speedup: float = 1.0, all_fields: bool = False, log=print):
         self.ground = ground
+        self.ground_link = GroundBeside(ground)
         self.transport = transport
         self.plant = plant
         self.home = home
@@ -37,7 +33,6 @@ class Px4SimulatorServer:
         self.sessions = 0
         self.session_steps: list[int] = []  # steps of every finished session
         self._stop = False
-        self._next_ground = 0.0
 
     def stop(self) -> None:
         """Ask the loop to finish (safe from a signal handler)."""
@@ -46,8 +41,10 @@ class Px4SimulatorServer:
     # --- sessions -------------------------------------------------------------------------
     def _start_session(self, conn) -> None:
         self.sessions += 1
+        t_old = self.plant.time_s
         self.session = SimulatorSession(conn, self.plant, self.home, speedup=self.speedup,
                                         all_fields=self.all_fields, counters=self.ground.counters, log=self._log)
+        self.ground_link.plant_restarted(t_old)
         self._log(f"flight stack connected ({conn.name}); the plant starts afresh")
 
     def _end_session(self) -> None:
@@ -58,21 +55,6 @@ class Px4SimulatorServer:
         self._log(f"flight stack gone ({s.conn.name}) at t = {self.plant.time_s:.3f} s after {s.steps} steps "
                   f"({s.actuator_messages} actuator messages); motors off, waiting for the next one")
 
-    # --- the ground link ------------------------------------------------------------------
-    def _service_ground(self, now: float) -> None:
-        g = self.ground
-        self._next_ground = now + GROUND_PERIOD_S
-        g._snap = None  # the plant moved since: the ground link's cached snapshot is stale
-        g._heartbeat_if_due(now)
-        g.service_io()
-        g.report_faults()
-        g.emit_streams()
-        for ep in g.endpoints:
-            ep.flush()
-
-    def _ground_sockets(self) -> list:
-        return [s for ep in self.ground.endpoints for s in ep.filenos()]
-
     # --- the loop ---------------------------------------------------------------------------
     def run(self, duration: float | None = None) -> None:
         """Serve until :meth:`stop`, or until a session has run ``duration`` simulated seconds.
@@ -82,7 +64,8 @@ class Px4SimulatorServer:
         service, which accepts and drops ground stations, or when a session starts or ends)."""
         t_end = math.inf if duration is None else duration - 0.5 * self.plant.period_s
         timed = duration is not None
-        self._next_ground = time.monotonic()
+        link = self.ground_link
+        link.next_at = time.monotonic()
         listening = self.transport.filenos()
         fds = ground = None
         fds_session = None
@@ -90,8 +73,8 @@ class Px4SimulatorServer:
         monotonic = time.monotonic
         while not self._stop:
             now = monotonic()
-            if now >= self._next_ground:
-                self._service_ground(now)
+            if now >= link.next_at:
+                link.service(now)
                 ground = None
             s = self.session
             if s is not None:
@@ -116,10 +99,10 @@ class Px4SimulatorServer:
             if timed and s is not None and self.plant.time_s >= t_end:
                 break
             if ground is None or fds_session is not s:
-                ground = self._ground_sockets()
+                ground = link.sockets()
                 fds = ground + listening + ([s.conn] if s is not None else [])
                 fds_session = s
-            timeout = self._next_ground - now
+            timeout = link.next_at - now
             if timeout < 0.0:
                 timeout = 0.0
             if s is not None:
@@ -137,7 +120,7 @@ class Px4SimulatorServer:
             if listening and listening[0] in readable:
                 self._accept()
             if ground and any(sock in readable for sock in ground):
-                self._service_ground(monotonic())
+                link.service(monotonic())
                 ground = None
         if self.session is not None:
             self._end_session()

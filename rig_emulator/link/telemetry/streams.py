@@ -58,6 +58,15 @@ class StreamSchedule:
         interval = self.interval_s.get(msg_id, 0.0)
         return -1 if interval <= 0.0 else int(round(interval * 1e6))
 
+    def clock_restarted(self, t_old: float, t_new: float = 0.0) -> None:
+        """The simulated clock jumped back from ``t_old`` to ``t_new`` (a reboot, a new session of a
+        flight stack in the loop): every next due time moves back by the jump (none before
+        ``t_new``), so the streams carry on at their rates instead of waiting for ``t_old``."""
+        shift = t_old - t_new
+        next_due = self.next_due
+        for msg_id in next_due:
+            next_due[msg_id] = max(t_new, next_due[msg_id] - shift)
+
     def due(self, now: float) -> list[int]:
         """Message ids due at simulated time ``now``; advances their schedules."""
         if self._start_offsets:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 
@@ -14,26 +13,16 @@ from gcs_tools.px4_peer import StreamLink, fly
 from rig_emulator.testing.rig import START_TIMEOUT_S, RigProcess
 
 
-def _wait_line(rig, prefix: str, timeout: float = 60.0) -> str | None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        for line in list(rig.output):
-            if line.startswith(prefix):
-                return line
-        time.sleep(0.02)
-    return None
-
-
 def test_serve_px4_simulator_process():
     with RigProcess(speedup=1, args=["--px4-simulator", "127.0.0.1:0", "--no-persist"]) as rig:
-        line = _wait_line(rig, "rig-emulator: px4 simulator on tcpin:127.0.0.1:")
+        line = rig.wait_line("rig-emulator: px4 simulator on tcpin:127.0.0.1:")
         assert line is not None, rig.output
         port = int(line.rsplit(":", 1)[1])
         link = StreamLink.tcp("127.0.0.1", port, timeout_s=START_TIMEOUT_S)  # a cold cache compiles at connect
         log = fly(link, 1.0)
         link.close()
         assert log.steps >= 250 and log.gps >= 9
-        assert _wait_line(rig, "rig-emulator: flight stack gone") is not None
+        assert rig.wait_line("rig-emulator: flight stack gone") is not None
         assert rig.stop(signal.SIGINT) == 0
         assert any(line.startswith("rig-emulator: stopped at t = ") for line in rig.output)
 

@@ -231,3 +231,33 @@ def test_serial_line_pseudo_terminal():
     finally:
         os.close(master)
         os.close(slave)
+
+
+def test_ground_stations_get_full_streams_in_every_session():
+    """One rig process, several flight-stack sessions: each session restarts the plant's clock, and
+    the ground link's streams (scheduled in simulated time) restart with it. A ground station that
+    connected between sessions gets its streams (SIM_STATE among them) in the next one, although that
+    session is shorter than the one before; nothing it is sent is dropped."""
+    with Px4Rig(ground=True, airframe="hilms") as rig:
+        link = StreamLink.tcp("127.0.0.1", rig.port)
+        fly(link, 3.0, HoverController(altitude_m=1.0), answer_at_connect=True)
+        link.close()
+        assert rig.wait_sessions_ended(1)
+        gcs = connect(rig.ground.urls[0])
+        try:
+            assert recv(gcs, "HEARTBEAT", timeout=30) is not None
+            link = StreamLink.tcp("127.0.0.1", rig.port)
+            done = {}
+            t = threading.Thread(target=lambda: done.setdefault(
+                "log", fly(link, 1.5, HoverController(altitude_m=1.0), answer_at_connect=True)))
+            t.start()
+            got = {kind: recv(gcs, kind, timeout=60) for kind in
+                   ("SIM_STATE", "ATTITUDE", "HILMS_LOAD_CELLS", "SERVO_OUTPUT_RAW", "GLOBAL_POSITION_INT")}
+            t.join(120)
+            link.close()
+            assert rig.wait_sessions_ended(2)
+            assert all(got.values()), [k for k, m in got.items() if m is None]
+            assert got["ATTITUDE"].time_boot_ms <= 1504  # from the second session's clock
+            assert "tx_overflow" not in rig.ground.counters.dropped, rig.ground.counters.dropped
+        finally:
+            gcs.close()

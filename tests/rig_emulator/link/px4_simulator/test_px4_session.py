@@ -77,6 +77,12 @@ class NoGround:
     def emit_streams(self):
         pass
 
+    def flush(self):
+        pass
+
+    def clock_restarted(self, t_old):
+        pass
+
 
 @pytest.fixture
 def served():
