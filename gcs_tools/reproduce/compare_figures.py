@@ -30,11 +30,30 @@ def _style(who: str, spec: str) -> dict:
             "label": compare.label(who, spec) + (" (yours)" if mine else "")}
 
 
+def _limit(peaks: dict, spec: str) -> float | None:
+    """A y-limit that keeps the controllers that stayed near the reference readable when one ran away
+    (None: every curve fits): three times the median peak, at least every plug-in's peak."""
+    values = np.asarray(list(peaks.values()), dtype=float)
+    lim = max(3.0 * float(np.median(values)),
+              max((v for w, v in peaks.items() if w not in compare.PAPER_CONTROLLERS), default=0.0))
+    return lim * 1.05 if np.any(values > lim * 1.05) and lim > 0 else None
+
+
+def _off_scale(ax, lines: dict, peaks: dict, lim) -> None:
+    """Clip the axis at +-lim and say in the legend which controllers leave it."""
+    if lim is None:
+        return
+    ax.set_ylim(-lim, lim)
+    for who, line in lines.items():
+        if peaks[who] > lim:
+            line.set_label(line.get_label() + " (off scale)")
+
+
 def _shocks(ax_rows, by, spec):
     for ax, (who, rs) in zip(ax_rows, by.items()):
         s = rs[0].series
         err = np.degrees(s["euler"] - s["euler_des"])
-        for i, name in enumerate(("phi", "theta", "psi")):
+        for i, name in enumerate(("phi", "theta")):  # the axes the shocks disturb (yaw: magnetometer noise)
             ax.plot(s["t"], err[:, i], lw=0.7, label=name)
         ax.set_title(_style(who, spec)["label"], fontsize=9, loc="left")
         ax.set_ylabel("error (deg)")
@@ -52,7 +71,7 @@ def draw(ctx, results: list) -> list[str]:
             fig, axes = plt.subplots(len(by), 1, figsize=(10, 1.7 * len(by) + 1), sharex=True, sharey=True)
             _shocks(np.atleast_1d(axes), by, spec)
             np.atleast_1d(axes)[-1].set_xlabel("t (s)")
-            fig.suptitle(f"Fig. 12 compared: attitude error under the shocks ({where})")
+            fig.suptitle(f"Fig. 12 compared: roll and pitch error under the shocks ({where})")
         elif exp == "harmonic":
             fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
             for who, rs in by.items():
@@ -101,28 +120,38 @@ def draw(ctx, results: list) -> list[str]:
             fig.suptitle(f"Fig. 15 compared: {heaviest} on arms 1 and 2, true attitude (dotted: diverged) ({where})")
         elif exp == "helix":
             fig, axes = plt.subplots(3, 1, figsize=(10, 7.5), sharex=True)
-            for who, rs in by.items():
-                s = rs[0].series
-                for i, ax in enumerate(axes):
-                    ax.plot(s["t"], s["pos"][:, i] - s["pos_des"][:, i], **_style(who, spec))
-            for ax, name in zip(axes, "XYZ"):
-                ax.set_ylabel(f"{name} error (m)")
-            axes[0].legend(loc="upper right", ncol=3)
+            for i, ax in enumerate(axes):
+                lines, peaks = {}, {}
+                for who, rs in by.items():
+                    s = rs[0].series
+                    err = s["pos"][:, i] - s["pos_des"][:, i]
+                    lines[who] = ax.plot(s["t"], err, **_style(who, spec))[0]
+                    peaks[who] = float(np.max(np.abs(err)))
+                _off_scale(ax, lines, peaks, _limit(peaks, spec))
+                ax.set_ylabel(f"{'XYZ'[i]} error (m)")
+                ax.legend(loc="upper right", ncol=3)
             axes[-1].set_xlabel("t (s)")
             fig.suptitle(f"Fig. 16 compared: tracking error on the line-then-helix of Eq. 46 ({where})")
         elif exp == "rectangle":
             fig, ax = plt.subplots(figsize=(8, 6))
+            wp = np.asarray(next(iter(by.values()))[0].job.config()["guidance.waypoints"], dtype=float)
+            lo, hi = wp[:, :2].min(axis=0) - 1.0, wp[:, :2].max(axis=0) + 1.0  # the rectangle and a metre around
             for who, rs in by.items():
                 s = rs[0].series
-                ax.plot(s["pos"][:, 0], s["pos"][:, 1], **_style(who, spec))
-            wp = np.asarray(next(iter(by.values()))[0].job.config()["guidance.waypoints"], dtype=float)
+                st = _style(who, spec)
+                xy = s["pos"][:, :2]
+                if np.any(xy < lo) or np.any(xy > hi):
+                    st["label"] += " (leaves the plot)"
+                ax.plot(xy[:, 0], xy[:, 1], **st)
+            ax.set_xlim(lo[0], hi[0])
+            ax.set_ylim(lo[1], hi[1])
             for p in wp:
                 ax.add_patch(plt.Circle((p[0], p[1]), paper_data.RECTANGLE_SWITCHING_RADIUS_M, fill=False,
                                         color="tab:red", lw=0.8))
             ax.plot(wp[:, 0], wp[:, 1], "k+", ms=10, label="waypoints (8 cm circles)")
             ax.set_xlabel("X east (m)")
             ax.set_ylabel("Y north (m)")
-            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_aspect("equal", adjustable="box")
             ax.legend(loc="center")
             ax.set_title(f"Fig. 19 compared: the waypoint rectangle, headless ({where})")
         else:

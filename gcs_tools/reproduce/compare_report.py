@@ -89,7 +89,7 @@ def summary_lines(columns, spec: str) -> list[str]:
         for p, by in verdicts(c, spec).items():
             for q, v in by.items():
                 k = counts(v)
-                out.append(f"{compare.label(p, spec)} on {c.label} vs {q.upper()}: better on {k['better']}, same on "
+                out.append(f"{compare.label(p, spec)} (yours) on {c.label} vs {q.upper()}: better on {k['better']}, same on "
                            f"{k['same']}, worse on {k['worse']} of {len(v)} metrics")
     return out
 
@@ -151,6 +151,8 @@ def render(sections, seed: int, quick: bool, columns, n_seeds: int, spec: str, s
     if any(load_controller(p).replaces == "position" for p in plugins):
         lines += ["A position-only controller does not fly the attitude-only experiments (shocks, harmonic, sweep, "
                   f"masses): there its rows are the attitude loop of `{strategy}` it keeps.", ""]
+    lines += ["SMC-FLC is the paper's SMC attitude loop under its FLC position loop: on the experiments without a "
+              "position loop (shocks, harmonic, sweep, masses) it flies as SMC, and its rows there are SMC's.", ""]
     if quick:
         lines += ["**Quick mode**: shortened runs and fewer frequencies and masses, to check that the pipeline works; "
                   "its numbers and verdicts are not the comparison's.", ""]
@@ -165,7 +167,7 @@ def render(sections, seed: int, quick: bool, columns, n_seeds: int, spec: str, s
         for p in plugins:
             heads = [f"vs {q.upper()}" for q in compare.PAPER_CONTROLLERS]
             k = {q: counts(v[p][q]) for q in compare.PAPER_CONTROLLERS}
-            lines += [f"**{compare.label(p, spec)}** on `{c.label}` ({len(_per_seed(c))} seed(s)):", ""]
+            lines += [f"**{compare.label(p, spec)} (yours)** on `{c.label}` ({len(_per_seed(c))} seed(s)):", ""]
             trows = [["better / same / worse", *[f"{k[q]['better']} / {k[q]['same']} / {k[q]['worse']}"
                                                  for q in compare.PAPER_CONTROLLERS]]]
             for exp in exps:

@@ -65,7 +65,7 @@ def test_the_verdicts_compare_every_metric_with_each_paper_controller(compared):
     assert set(v) == {"smc", "flc", "smc-flc", "pid"} and len(v["smc"]) == n_metrics
     # the PID plug-in is the built-in PID strategy's law: on the same runs it is "same" as PID on most metrics
     assert sum(x == SAME for x in v["pid"].values()) >= n_metrics // 2
-    assert f"PID on hilms vs SMC: better on" in stdout and "claims reproduced" not in stdout
+    assert "PID (yours) on hilms vs SMC: better on" in stdout and "claims reproduced" not in stdout
     wrote = [line for line in stdout.splitlines() if line.startswith("wrote")][0]
     assert wrote.endswith(f"{2 * len(FILES)} figures")
 
