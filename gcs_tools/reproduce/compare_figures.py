@@ -101,7 +101,7 @@ def draw(ctx, results: list) -> list[str]:
             fig.suptitle(f"Fig. 14 compared: mean error against the frequency of the reference ({where})")
         elif exp == "masses":
             fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
-            heaviest = None
+            heaviest, diverged = None, False
             for who, rs in by.items():
                 r = rs[-1]
                 heaviest = r.job.label.rsplit("/", 1)[1]
@@ -110,11 +110,13 @@ def draw(ctx, results: list) -> list[str]:
                     ax.plot(s["t"], np.degrees(s["euler_true"][:, i]), **_style(who, spec))
                 t_div = divergence_time(s["t"], s["euler_true"])
                 if t_div is not None:
+                    diverged = True
                     for ax in axes:
                         ax.axvline(t_div, color=color(who, spec), ls=":", lw=0.8)
             for ax, name in zip(axes, ("phi", "theta")):
                 ax.set_ylabel(f"true {name} (deg)")
-                ax.set_ylim(-50, 50)
+                if diverged:  # a tipped rig: show up to a little past the 45 deg that count as diverged
+                    ax.set_ylim(-50, 50)
                 ax.legend(loc="upper right", ncol=3)
             axes[-1].set_xlabel("t (s)")
             fig.suptitle(f"Fig. 15 compared: {heaviest} on arms 1 and 2, true attitude (dotted: diverged) ({where})")
