@@ -63,7 +63,8 @@ METRICS = {
     "sweep": (Metric("phi_deg", "ME phi, average over omega (deg)", 0.001),
               Metric("theta_deg", "ME theta, average over omega (deg)", 0.001)),
     "masses": (Metric("held", "masses held", 0.5, 0, True),
-               Metric("phi_deg", "ME phi, heaviest (deg)", 0.001), Metric("theta_deg", "ME theta, heaviest (deg)", 0.001),
+               Metric("phi_deg", "ME phi, heaviest (deg)", 0.001),
+               Metric("theta_deg", "ME theta, heaviest (deg)", 0.001),
                Metric("chattering_deg_rms", "chattering, heaviest (deg rms > 5 Hz)", 0.001)),
     "helix": (Metric("phi_deg", "ME phi (deg)", 0.001), Metric("theta_deg", "ME theta (deg)", 0.001),
               Metric("psi_deg", "ME psi (deg)", 0.001), Metric("x_m", "ME X (m)", 0.0005),
@@ -118,8 +119,9 @@ def _job(ctx: Context, who: str, exp: str, scenario: str, variant: str = "", dur
                   label=f"controller/{exp}/{who}" + (f"/{variant}" if variant else ""))
 
 
-def _harmonic(amplitude_omega: float) -> dict:
-    return {"guidance.omega": amplitude_omega,
+def _harmonic(omega: float) -> dict:
+    """Eq. 44's roll and pitch references at ``omega`` (rad/s), yaw held at zero."""
+    return {"guidance.omega": omega,
             "guidance.amplitude_deg": [paper_data.HARMONIC_AMPLITUDE_DEG] * 2 + [0.0]}
 
 

@@ -30,7 +30,7 @@ def _style(who: str, spec: str) -> dict:
             "label": compare.label(who, spec) + (" (yours)" if mine else "")}
 
 
-def _limit(peaks: dict, spec: str) -> float | None:
+def _limit(peaks: dict) -> float | None:
     """A y-limit that keeps the controllers that stayed near the reference readable when one ran away
     (None: every curve fits): three times the median peak, at least every plug-in's peak."""
     values = np.asarray(list(peaks.values()), dtype=float)
@@ -129,7 +129,7 @@ def draw(ctx, results: list) -> list[str]:
                     err = s["pos"][:, i] - s["pos_des"][:, i]
                     lines[who] = ax.plot(s["t"], err, **_style(who, spec))[0]
                     peaks[who] = float(np.max(np.abs(err)))
-                _off_scale(ax, lines, peaks, _limit(peaks, spec))
+                _off_scale(ax, lines, peaks, _limit(peaks))
                 ax.set_ylabel(f"{'XYZ'[i]} error (m)")
                 ax.legend(loc="upper right", ncol=3)
             axes[-1].set_xlabel("t (s)")

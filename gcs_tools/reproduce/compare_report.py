@@ -89,8 +89,8 @@ def summary_lines(columns, spec: str) -> list[str]:
         for p, by in verdicts(c, spec).items():
             for q, v in by.items():
                 k = counts(v)
-                out.append(f"{compare.label(p, spec)} (yours) on {c.label} vs {q.upper()}: better on {k['better']}, same on "
-                           f"{k['same']}, worse on {k['worse']} of {len(v)} metrics")
+                out.append(f"{compare.label(p, spec)} (yours) on {c.label} vs {q.upper()}: better on {k['better']}, "
+                           f"same on {k['same']}, worse on {k['worse']} of {len(v)} metrics")
     return out
 
 

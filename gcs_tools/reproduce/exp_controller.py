@@ -51,5 +51,6 @@ def analyse(ctx: Context, results: list, live=None) -> Section:
                      "controller": r.job.controller, "sim_time_s": r.sim_time_s, "steps": r.steps,
                      "digest": r.digest()} for r in results]}
     atomic_write_text(where / METRICS_FILE, json.dumps(jsonable(doc), indent=1, sort_keys=True) + "\n")
-    body = f"Plant `{ctx.airframe}`, seed {ctx.seed}: {len(results)} runs, metrics in `runs/{where.name}/{METRICS_FILE}`."
+    body = (f"Plant `{ctx.airframe}`, seed {ctx.seed}: {len(results)} runs, metrics in "
+            f"`runs/{where.name}/{METRICS_FILE}`.")
     return Section(NAME, TITLE, PAPER, body, figs, numbers, [])
