@@ -94,8 +94,18 @@ def summary_lines(columns, spec: str) -> list[str]:
     return out
 
 
-def _metric(exp: str, key: str):
-    return next(m for m in compare.METRICS[exp] if m.key == key)
+def _relative(mine: list, theirs: list, metric) -> str:
+    """How the means compare, for a verdict cell: yours as a multiple of theirs ("0.27x"), counts as
+    "4 vs 2"; "" where a failed run leaves no mean."""
+    a, b = float(np.mean(mine)), float(np.mean(theirs))
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return ""
+    if metric.higher_is_better:
+        return f"{a:g} vs {b:g}"
+    if not b > 0:
+        return ""
+    r = a / b
+    return f"{r:.2f}x" if r >= 0.01 else f"{r:.1g}x"
 
 
 def fidelity_rows(column) -> list:
@@ -160,7 +170,8 @@ def render(sections, seed: int, quick: bool, columns, n_seeds: int, spec: str, s
               "Each metric is measured per seed; the tables give the mean over the seeds and, in brackets, the "
               "smallest and largest seed (the seed spread). Lower is better except where the metric says otherwise "
               "(masses held, waypoints reached). A verdict compares your controller with one of the paper's on one "
-              "metric and plant: " + compare.RULE, ""]
+              "metric and plant: " + compare.RULE + " In brackets: your mean as a multiple of theirs (the counts "
+              "side by side).", ""]
     lines += ["## Verdicts", ""]
     for c in columns:
         v = verdicts(c, spec)
@@ -175,7 +186,12 @@ def render(sections, seed: int, quick: bool, columns, n_seeds: int, spec: str, s
                     cells = []
                     for q in compare.PAPER_CONTROLLERS:
                         x = v[p][q].get((exp, m.key))
-                        cells.append("-" if x is None else (f"**{x}**" if x != compare.SAME else x))
+                        if x is None:
+                            cells.append("-")
+                            continue
+                        word = f"**{x}**" if x != compare.SAME else x
+                        size = _relative(values(c, exp, p, m.key), values(c, exp, q, m.key), m)
+                        cells.append(f"{word} ({size})" if size else word)
                     trows.append([f"{compare.TITLES[exp][1]}: {m.label}", *cells])
             lines += [table(["metric", *heads], trows), ""]
     first = {s.name: s for s in sections}.get("controller")
