@@ -193,7 +193,9 @@ def _print_summary(args, cfg, result, errors: dict, reached, failsafe) -> None:
     """The figures of a finished run: mean errors (Eq. 45), failsafe, waypoints (text or --json)."""
     label = f"{_controller_label(cfg, args.strategy)} ({args.airframe})"
     rows = {label: errors}
-    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" else None
+    plugin = cfg["controller.plugin"]
+    # the paper's Table 6 is its own controllers': next to a plug-in it would read as a grade of it
+    paper = PAPER_TABLE_6.get(args.strategy) if args.scenario == "helix" and not plugin else None
     if paper is not None:
         rows[f"paper {args.strategy}"] = paper
     fs = None if failsafe is None else {"t_s": failsafe[0], "cause": failsafe[1], "action": cfg["failsafe.action"]}
@@ -212,7 +214,11 @@ def _print_summary(args, cfg, result, errors: dict, reached, failsafe) -> None:
     print(format_table(rows))
     if paper is not None and result.sim_time_s >= 60.0 - 1e-9:
         near = [c for c in paper if math.isfinite(errors[c]) and 0.5 <= errors[c] / paper[c] <= 2.0]
-        print(f"Table 6: {len(near)} of {len(paper)} mean errors within a factor 2 of the paper's")
+        print(f"fidelity check of the emulator (the paper's own {args.strategy.upper()} against its Table 6): "
+              f"{len(near)} of {len(paper)} mean errors within a factor 2 of the paper's")
+    if plugin and args.scenario == "helix":
+        print("the paper publishes no numbers for your controller; to compare it with the paper's four controllers "
+              f"on the same runs: rig-gcs reproduce -o DIR --controller {plugin} (docs/how-to/compare-controllers.md)")
     if fs is not None:
         what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
         print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")

@@ -41,9 +41,12 @@ def add_parser(sub) -> None:
                    help=f"run only these experiments (repeatable, or comma-separated): {', '.join(NAMES)}")
     p.add_argument("--quick", action="store_true", help="shortened runs, fewer frequencies and masses: a smoke test, "
                                                         "not the reproduction")
-    p.add_argument("--controller", metavar="MODULE:NAME",
-                   help="compare a controller plug-in with the paper's controllers (Table 6, Eq. 44; "
-                        "docs/YOUR_CONTROLLER.md); alone it runs only that comparison, with --only also those")
+    p.add_argument("--controller", metavar="MODULE:NAME", action="append",
+                   help="compare a controller plug-in (docs/YOUR_CONTROLLER.md) with the paper's four controllers "
+                        "(SMC, FLC, SMC-FLC, PID) on shocks, harmonic, sweep, masses, helix and rectangle (--only "
+                        "picks among them) instead of reproducing the paper's claims: tables over the seeds, figures "
+                        "and better/same/worse verdicts (repeatable, or comma-separated, for several plug-ins; "
+                        "docs/how-to/compare-controllers.md)")
     p.add_argument("--strategy", default="smc-flc", choices=("smc-flc", "flc", "smc", "pid"),
                    help="with --controller: the built-in loops the plug-in keeps (default %(default)s)")
     p.add_argument("--no-progress", action="store_true", help="no progress output on stderr")
@@ -96,17 +99,22 @@ def cmd_reproduce(args) -> int:
     from gcs_tools.reproduce.paper_data import CLAIMS
     from gcs_tools.reproduce.plants import count, verdicts
 
-    for col in outcome.columns:
+    if args.controller:
+        from gcs_tools.reproduce.compare_report import summary_lines
+
+        for line in summary_lines(outcome.columns, ",".join(args.controller)):
+            print(line)
+    for col in outcome.columns if not args.controller else []:
         k = count(col)
         print(f"{col.label}: {k['reproduced']} of {sum(k.values())} claims reproduced, {k['partly reproduced']} "
               f"partly (majority over {args.seeds} seed(s))")
-    for claim, (text, where) in CLAIMS.items():
+    for claim, (text, where) in CLAIMS.items() if not args.controller else []:
         cells = [verdicts(col).get(claim, ("not run", []))[0] for col in outcome.columns]
         if all(c == "not run" for c in cells):
             continue
         print(" | ".join(f"{c:>17}" for c in cells) + f" : {text} ({where})")
     print("columns: " + " | ".join(col.label for col in outcome.columns))
-    figures = sum(len(s.figures) for s in outcome.sections)
+    figures = sum(name.suffix == ".png" for name in outcome.files)
     print(f"wrote {outcome.files[0]} , results.json and {figures} figures")
     where = f"Dask cluster {args.scheduler}" if args.scheduler else "local processes"
     print(f"reproduction: {wall:.1f} s wall, {cpu:.1f} s CPU (this process and its local children), "

@@ -1,76 +1,56 @@
 """Your controller next to the paper's: ``rig-gcs reproduce -o DIR --controller package.module:Name``.
 
-Runs a controller plug-in (docs/YOUR_CONTROLLER.md) on the paper's experiments that report
-numbers or a tracking claim, beside the built-in strategies the paper flew, same seed and
-rig:
+The comparison as an experiment of the reproduction: for each (plant, seed) it flies every
+controller plug-in and the paper's four controllers on the experiments of
+:data:`gcs_tools.reproduce.compare.EXPERIMENTS` (:func:`gcs_tools.reproduce.compare.jobs`),
+then measures them (:func:`gcs_tools.reproduce.compare.metrics`), draws the figures with every
+controller in (:mod:`gcs_tools.reproduce.compare_figures`) and writes the seed's metrics to
+``DIR/runs/PLANT-seedN/metrics.json``. The tables over the seeds and the verdicts are
+:mod:`gcs_tools.reproduce.compare_report`'s.
 
-* the line-then-helix of Eq. 46 (Table 6): mean errors (Eq. 45) of the plug-in, of FLC and
-  SMC-FLC here, and the paper's Table 6 rows;
-* the harmonic roll and pitch references of Eq. 44 / Fig. 13: attitude mean errors of the
-  plug-in, SMC and FLC (the paper gives no numbers there).
-
-The plug-in keeps the loops it does not replace from ``--strategy`` (default ``smc-flc``, the
-paper's proposal). A position-only plug-in does not fly the harmonic run (attitude
-references, the position loop is off): that row then shows the kept attitude loop. There is
-no verdict: the paper makes no claim about your controller.
+A plug-in keeps the loops it does not replace from ``--strategy`` (default ``smc-flc``, the
+paper's proposal): on the attitude-only experiments (shocks, harmonic, sweep, masses) a
+position-only plug-in flies with that strategy's attitude loop.
 """
 
 from __future__ import annotations
 
-from gcs_tools.reproduce import paper_data
-from gcs_tools.reproduce.experiment import Context, Section, fmt, table
-from protocol.mean_error import COLUMNS
-from rig_emulator.sweep import SimJob
+import json
+from pathlib import Path
+
+from gcs_tools.reproduce import compare, compare_figures
+from gcs_tools.reproduce.experiment import Context, Section, jsonable
+from protocol.atomic_file import atomic_write_text
 
 NAME = "controller"
 TITLE = "Your controller next to the paper's"
-PAPER = "Table 6, Eq. 44"
-HELIX = ("flc", "smc-flc")
-HARMONIC = ("smc", "flc")
-QUICK_S = 20.0
-PLUGIN = "plugin"
+PAPER = "Figs. 12-16, 19, Tables 4 and 6"
+METRICS_FILE = "metrics.json"
 
 
-def jobs(ctx: Context) -> list[SimJob]:
-    quick = QUICK_S if ctx.quick else None
-    helix_cols = ("t", "pos", "pos_des", "euler", "euler_des")
-    out = [SimJob("helix", ctx.strategy, seed=ctx.seed, duration=quick, columns=helix_cols, label=f"{NAME}/helix/{PLUGIN}",
-                  controller=ctx.controller)]
-    out += [SimJob("helix", s, seed=ctx.seed, duration=quick, columns=helix_cols, label=f"{NAME}/helix/{s}")
-            for s in HELIX]
-    harmonic = {"guidance.omega": paper_data.HARMONIC_OMEGA,
-                "guidance.amplitude_deg": [paper_data.HARMONIC_AMPLITUDE_DEG] * 2 + [0.0]}
-    out.append(SimJob("harmonic", ctx.strategy, seed=ctx.seed, duration=quick, overrides=harmonic, columns=helix_cols,
-                      label=f"{NAME}/harmonic/{PLUGIN}", controller=ctx.controller))
-    out += [SimJob("harmonic", s, seed=ctx.seed, duration=quick, overrides=harmonic, columns=helix_cols,
-                   label=f"{NAME}/harmonic/{s}") for s in HARMONIC]
-    return out
+def jobs(ctx: Context) -> list:
+    return compare.jobs(ctx)
+
+
+def run_dir(ctx: Context) -> Path:
+    """``DIR/runs/PLANT-seedN`` of this context (the first (plant, seed) writes its figures to DIR itself)."""
+    here = Path(ctx.out_dir)
+    name = f"{ctx.airframe}-seed{ctx.seed}"
+    root = here.parent.parent if here.parent.name == "runs" and here.name == name else here
+    return root / "runs" / name
 
 
 def analyse(ctx: Context, results: list, live=None) -> Section:
-    me = {r.job.label.split("/", 1)[1]: r.mean_errors() for r in results}
-    who = f"`{ctx.controller}`"
-    helix_rows = [[f"{who} (ours)"] + [fmt(me[f'helix/{PLUGIN}'][c], 4) for c in COLUMNS]]
-    for s in HELIX:
-        helix_rows.append([f"{s.upper()} (ours)"] + [fmt(me[f"helix/{s}"][c], 4) for c in COLUMNS])
-    for s in HELIX:
-        helix_rows.append([f"{s.upper()} (paper)"] + [fmt(paper_data.TABLE_6[s][c], 4) for c in COLUMNS])
-    att = ("phi_deg", "theta_deg", "psi_deg")
-    harm_rows = [[f"{who} (ours)"] + [fmt(me[f"harmonic/{PLUGIN}"][c], 4) for c in att]]
-    harm_rows += [[f"{s.upper()} (ours)"] + [fmt(me[f"harmonic/{s}"][c], 4) for c in att] for s in HARMONIC]
-    duration = results[0].series["t"][-1]
-    body = "\n".join([
-        f"Controller plug-in {who}; the loops it does not replace are those of strategy `{ctx.strategy}`. Same seed "
-        f"({ctx.seed}) and rig for every row.",
-        "",
-        f"Line-then-helix (Eq. 46), {fmt(duration, 0)} s, mean errors (Eq. 45), Table 6:",
-        "",
-        table(["", "ME phi (deg)", "ME theta (deg)", "ME psi (deg)", "ME X (m)", "ME Y (m)", "ME Z (m)"], helix_rows),
-        "",
-        f"Harmonic roll and pitch references (Eq. 44, {paper_data.HARMONIC_AMPLITUDE_DEG:g} deg at "
-        f"{paper_data.HARMONIC_OMEGA:g} rad/s; Fig. 13 has no numbers), mean errors:",
-        "",
-        table(["", "ME phi (deg)", "ME theta (deg)", "ME psi (deg)"], harm_rows),
-    ])
-    numbers = {"controller": ctx.controller, "strategy": ctx.strategy, "mean_errors": me}
-    return Section(NAME, TITLE, PAPER, body, [], numbers, [])
+    numbers = compare.metrics(results)
+    figs = compare_figures.draw(ctx, results)
+    where = run_dir(ctx)
+    where.mkdir(parents=True, exist_ok=True)
+    doc = {"airframe": ctx.airframe, "seed": ctx.seed, "quick": ctx.quick, "controller": ctx.controller,
+           "strategy": ctx.strategy, "overrides": dict(ctx.overrides), "metrics": numbers,
+           "runs": [{"label": r.job.label, "scenario": r.job.scenario, "strategy": r.job.strategy,
+                     "controller": r.job.controller, "sim_time_s": r.sim_time_s, "steps": r.steps,
+                     "digest": r.digest()} for r in results]}
+    atomic_write_text(where / METRICS_FILE, json.dumps(jsonable(doc), indent=1, sort_keys=True) + "\n")
+    body = (f"Plant `{ctx.airframe}`, seed {ctx.seed}: {len(results)} runs, metrics in "
+            f"`runs/{where.name}/{METRICS_FILE}`.")
+    return Section(NAME, TITLE, PAPER, body, figs, numbers, [])

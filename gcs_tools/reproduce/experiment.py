@@ -53,8 +53,9 @@ class Context:
         merged.update(overrides or {})
         return SimJob(scenario, strategy, seed=self.seed, duration=duration, overrides=merged,
                       airframe=self.airframe, columns=columns, label=label)
-    controller: str = ""  # a controller plug-in to compare (exp_controller), 'package.module:Name'
+    controller: str = ""  # controller plug-ins to compare (exp_controller), 'package.module:Name', comma-separated
     strategy: str = "smc-flc"  # the loops the plug-in keeps
+    compare: tuple = ()  # with a controller: the experiments it flies (gcs_tools.reproduce.compare; () = all)
 
 
 @dataclass(frozen=True)

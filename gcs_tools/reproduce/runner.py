@@ -84,9 +84,12 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
     to ``DIR/runs/PLANT-seedN/`` and their rectangle is the headless twin (``live=False``: the
     first one's too, no rig process).
 
-    ``controller`` (``package.module:Name``): also run that controller plug-in next to the paper's
-    controllers (:mod:`gcs_tools.reproduce.exp_controller`), keeping the loops of ``strategy`` it
-    does not replace; without ``only`` that comparison is all that runs.
+    ``controller`` (``package.module:Name``, several comma-separated or as a list): compare those
+    controller plug-ins with the paper's four controllers instead of reproducing the paper's claims
+    (:mod:`gcs_tools.reproduce.exp_controller`, :mod:`gcs_tools.reproduce.compare`), keeping the
+    loops of ``strategy`` they do not replace, on the experiments ``only`` names among
+    :data:`gcs_tools.reproduce.compare.EXPERIMENTS` (all of them without ``only``); every
+    (plant, seed) also gets ``DIR/runs/PLANT-seedN/metrics.json``.
     """
     from rig_emulator.config.loader import ConfigError
     from rig_emulator.sweep import JobFailed, run_jobs
@@ -110,20 +113,33 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
             check_config(plant, None, overrides or None)
         except ConfigError as exc:
             raise UsageError(f"--set: {exc}") from None
+    compared = ()
     if controller:
-        from gcs_tools.reproduce import exp_controller
+        from gcs_tools.reproduce import compare, exp_controller
         from rig_emulator.controllers import PluginError, load_controller
 
-        try:
-            from rig_emulator.config.loader import fold_plugin_params
+        names = list(controller) if isinstance(controller, (list, tuple)) else [controller]
+        names = [p for n in names for p in compare.plugins(n)]
+        if len(set(names)) != len(names):
+            raise UsageError(f"--controller: {', '.join(sorted({n for n in names if names.count(n) > 1}))} "
+                             "given twice")
+        for name in names:
+            try:
+                from rig_emulator.config.loader import fold_plugin_params
 
-            # a plug-in that cannot load, or a --set controller.params.NAME it refuses, is a usage
-            # error, before anything runs
-            load_controller(controller, fold_plugin_params(overrides or {}).get("controller.params"))
-        except PluginError as exc:
-            raise UsageError(f"--controller: {exc}") from None
-        exps, with_stability = select(only) if only else ([], False)
-        exps = [exp_controller] + exps
+                # a plug-in that cannot load, or a --set controller.params.NAME it refuses, is a usage
+                # error, before anything runs
+                load_controller(name, fold_plugin_params(overrides or {}).get("controller.params"))
+            except PluginError as exc:
+                raise UsageError(f"--controller: {exc}") from None
+        controller = ",".join(names)
+        if only:
+            bad = [n for n in only if n not in compare.EXPERIMENTS]
+            if bad:
+                raise UsageError(f"--only {', '.join(bad)}: not compared with --controller; choose from "
+                                 f"{', '.join(compare.EXPERIMENTS)}")
+            compared = tuple(e for e in compare.EXPERIMENTS if e in only)
+        exps, with_stability = [exp_controller], False
     else:
         exps, with_stability = select(only)
     out = prepare_out_dir(out_dir)
@@ -134,7 +150,7 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
             primary = not contexts
             where = out if primary else out / "runs" / f"{plant}-seed{s}"
             contexts.append(Context(seed=s, quick=quick, out_dir=where, airframe=plant, overrides=pairs,
-                                    controller=controller or "", strategy=strategy))
+                                    controller=controller or "", strategy=strategy, compare=compared))
     main = contexts[0]
     jobs, spans = [], {}
     for i, ctx in enumerate(contexts):  # contexts are keyed by position (their overrides may hold lists)
@@ -201,8 +217,10 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
     columns = [PlantRuns(plant, plant, pairs, {c.seed: by_ctx[i] for i, c in enumerate(contexts) if c.airframe == plant})
                for plant in plants]
     sections = by_ctx[0]
-    names = None if not (only or controller) else [e.NAME for e in exps if e.NAME != "controller"] + (
-        [STABILITY] if with_stability else [])
+    if controller:
+        names = list(compared)  # the experiments compared (none named: all of them)
+    else:
+        names = None if not only else [e.NAME for e in exps] + ([STABILITY] if with_stability else [])
     files = report.write(out, sections, stab_md, stab, seed, quick, names, columns=columns, n_seeds=seeds,
                          controller=controller, strategy=strategy)
     files += [out / name for s in sections for name in s.figures]

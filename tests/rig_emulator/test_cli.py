@@ -97,3 +97,18 @@ def test_airframe_help_lists_every_preset(capsys):
     text = " ".join(capsys.readouterr().out.split()).replace("- ", "-")  # argparse wraps at hyphens
     for name in ("hilms", "hilms-ideal", "os4", "draganflyer"):
         assert name in text
+
+
+def test_simulate_grades_only_the_papers_own_controllers_against_table_6():
+    """Table 6 is the paper's controllers': for a plug-in, its errors alone and where to compare them;
+    for a built-in, the factor-2 line is labelled as what it is, a fidelity check of the emulator."""
+    plugin = "rig_emulator.controllers.examples.pid:PID"
+    p = _run("simulate", "--scenario", "helix", "--controller", plugin, "--duration", "60", "--seed", "1")
+    assert p.returncode == 0, p.stderr
+    assert "ME_X(m)" in p.stdout and "paper" not in p.stdout.split("the paper publishes")[0]
+    assert "within a factor" not in p.stdout
+    assert f"rig-gcs reproduce -o DIR --controller {plugin}" in p.stdout
+    p = _run("simulate", "--scenario", "helix", "--strategy", "smc-flc", "--duration", "60", "--seed", "1")
+    assert p.returncode == 0, p.stderr
+    assert "paper smc-flc" in p.stdout
+    assert "fidelity check of the emulator (the paper's own SMC-FLC against its Table 6): " in p.stdout
