@@ -46,10 +46,16 @@ class Mark:
 
     name: str  # a metric of paper_targets.toml, or claim:ID
     status: str  # FITTED, CHOSEN or PREDICTED
-    keys: tuple  # the keys behind the status (fitted keys for FITTED, hand-set ones for CHOSEN)
+    keys: tuple  # the keys fitted against it
+    hand: tuple = ()  # the keys set by hand against it (besides the fitted ones)
 
     def text(self) -> str:
-        return self.status if not self.keys else f"{self.status}: {', '.join(f'`{k}`' for k in self.keys)}"
+        parts = []
+        if self.keys:
+            parts.append(f"{FITTED}: {', '.join(f'`{k}`' for k in self.keys)}")
+        if self.hand:
+            parts.append(f"{CHOSEN}: {', '.join(f'`{k}`' for k in self.hand)}")
+        return "; ".join(parts) if parts else f"**{PREDICTED}**"
 
 
 def load_sources(text: str | None = None) -> list[Source]:
@@ -96,12 +102,8 @@ def marks(sources: list[Source] | None = None) -> dict[str, Mark]:
     for name in names():
         fitted = tuple(s.key for s in sources if _matches(name, s.fitted))
         chosen = tuple(s.key for s in sources if _matches(name, s.chosen) and s.key not in fitted)
-        if fitted:
-            out[name] = Mark(name, FITTED, fitted)
-        elif chosen:
-            out[name] = Mark(name, CHOSEN, chosen)
-        else:
-            out[name] = Mark(name, PREDICTED, ())
+        status = FITTED if fitted else CHOSEN if chosen else PREDICTED
+        out[name] = Mark(name, status, fitted, chosen)
     return out
 
 
