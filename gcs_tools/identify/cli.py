@@ -299,7 +299,7 @@ def cmd_identify(args) -> int:
 
     problem, params, base = build(args)
     for name, pp in getattr(args, "paper_priors_used", []):
-        print(f"prior {name} = {pp.mean:g} +- {pp.sigma:g} (the paper: {pp.source.split(':')[0]}; "
+        print(f"prior {name} = {pp.mean:g} +- {pp.sigma:g} (the paper: {pp.where}; "
               "--no-paper-priors leaves it out)")
     out = Path(args.output)
     if out.exists() and out.is_dir():

@@ -22,6 +22,7 @@ class PaperPrior:
     mean: float
     sigma: float
     source: str
+    where: str = ""  # short: the paper's place and words
 
 
 def load_priors(text: str | None = None) -> list[PaperPrior]:
@@ -30,7 +31,8 @@ def load_priors(text: str | None = None) -> list[PaperPrior]:
     out = []
     for i, p in enumerate(tomllib.loads(text).get("prior", [])):
         try:
-            prior = PaperPrior(str(p["key"]), float(p["mean"]), float(p["sigma"]), str(p["source"]))
+            prior = PaperPrior(str(p["key"]), float(p["mean"]), float(p["sigma"]), str(p["source"]),
+                               str(p.get("where", "")))
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{PRIORS_FILE}: prior[{i}]: needs key, mean, sigma, source ({exc})") from None
         if not prior.sigma > 0:
