@@ -200,7 +200,7 @@ def markdown(doc: dict, command: str | None = None) -> str:
         lines += [f"Command: `{command}`", ""]
     header = ["fit on", "predict", *[f"`{k}`" for k in keys], "in-sample rms log error (within x2)",
               "held-out rms log error (within x2)"]
-    rows = [["(shipped preset, no refit)", "-", *["-"] * len(keys), _fig(doc["shipped"]["all"]), "-"]]
+    rows = [["(the preset as it is, no refit; these settings)", "-", *["-"] * len(keys), _fig(doc["shipped"]["all"]), "-"]]
     for sp in doc["splits"]:
         rows.append([_groups_text(sp["fit_on"]), _groups_text(sp["predict"]),
                      *[_value(sp["values"][k]) for k in keys], _fig(sp["in_sample"]), _fig(sp["held_out"])])
@@ -216,7 +216,11 @@ def markdown(doc: dict, command: str | None = None) -> str:
         lines += ["", "Each number, simulated / paper, held out (h) or fitted (f):", ""]
         hdr = ["number", "paper", "shipped"] + [f"fit on {_groups_text(sp['fit_on'])}" for sp in held]
         rows = []
-        for n, pv in doc["paper"].items():
+        targets, _ = load_data()
+        order = [t.metric for t in targets if t.metric in doc["paper"]]
+        order += [n for n in doc["paper"] if n not in order]
+        for n in order:
+            pv = doc["paper"][n]
             sh = doc["shipped"]["metrics"].get(n)
             cells = [n, f"{pv:g}", _ratio(sh, pv)]
             for sp in held:
