@@ -281,3 +281,27 @@ def test_the_real_fit_reuses_points_another_split_simulated(monkeypatch):
     assert b.values[0] == pytest.approx(0.7, abs=1e-3)
     # the second fit's start and Halton design (the same points) were not simulated again
     assert len(sims) - first < b.evaluations
+
+
+def test_the_held_out_command_writes_the_table_as_json_and_markdown(tmp_path, monkeypatch, capsys):
+    import json
+
+    from gcs_tools.cli import main
+
+    real_run = held_out.run
+
+    def toy_run(base, params, **kw):  # the real machinery on the toy model: no simulation
+        assert kw["mode"] == "single" and kw["variant"] == "short" and kw["max_evals"] == 3
+        return real_run(base, params, mode=kw["mode"], identify=_toy_identify,
+                        evaluate=lambda problem, workers: _toy_metrics(0.46))
+
+    monkeypatch.setattr(held_out, "run", toy_run)
+    out = tmp_path / "held.json"
+    rc = main(["identify", "--paper", "--held-out", "single", "--paper-variant", "short", "--max-evals", "3",
+               "--params", "flc.position_rate_share=0:1", "--no-progress", "-o", str(out)])
+    assert rc == 0
+    doc = json.loads(out.read_text())
+    assert [s["fit_on"] for s in doc["splits"]] == [["table4"], ["table6"], ["fig19"], ["table4", "table6", "fig19"]]
+    assert doc["command"].startswith("rig-gcs identify --paper --held-out single")
+    md = (tmp_path / "held.md").read_text()
+    assert "| Table 4 | Table 6 + Fig. 19 |" in md and md.strip() in capsys.readouterr().out
