@@ -78,6 +78,16 @@ def add_parser(sub) -> None:
     g.add_argument("--paper-seeds", type=_evals, default=1, metavar="N",
                    help="with --paper: every number the mean over the runs of N seeds (--seed .. --seed + N - 1): "
                         "%(default)s")
+    g.add_argument("--no-paper-priors", action="store_true",
+                   help="with --paper: leave out the paper's physical priors (gcs_tools/identify/paper_priors.toml: "
+                        "joint.coulomb 0 +- 0.01 N m, the joint being 'fully lubricated'; motors.thrust_bias_grf "
+                        "0 +- 10 gr.F, Eq. 40 being calibrated on the same load cells), otherwise applied to any "
+                        "fitted element of those keys without its own --prior")
+    g.add_argument("--held-out", choices=("logo", "single"), metavar="SPLITS",
+                   help="with --paper: instead of one fit, fit on groups of the paper's numbers (Table 4, Table 6, "
+                        "Fig. 19) and predict the others: logo = fit on two groups, predict the third; single = fit "
+                        "on one, predict two; plus a fit on all three. -o FILE.json gets the table (and FILE.md its "
+                        "markdown); every key starts mid-range (docs/explanation/paper-fit.md)")
     g.add_argument("--tlog", action="append", default=[], metavar="FILE", help="a flight log to fit (repeatable)")
     g = p.add_argument_group("flight logs")
     g.add_argument("--scenario", action="append", default=[], metavar="NAME",
@@ -225,6 +235,16 @@ def build(args):
             raise UsageError("--claims goes with --paper")
         if (args.paper_targets is not None or args.paper_seeds != 1) and not args.paper:
             raise UsageError("--paper-targets and --paper-seeds go with --paper")
+        no_priors, held = getattr(args, "no_paper_priors", False), getattr(args, "held_out", None)
+        if (no_priors or held) and not args.paper:
+            raise UsageError("--no-paper-priors and --held-out go with --paper")
+        if held and (args.paper_targets is not None or args.claims):
+            raise UsageError("--held-out chooses the numbers of each fit itself: drop --paper-targets and --claims")
+        args.paper_priors_used = []
+        if args.paper and not no_priors:
+            from gcs_tools.identify import paper_priors
+
+            params, args.paper_priors_used = paper_priors.apply(params, explicit=set(priors))
         if args.paper:
             from gcs_tools.identify.paper import PaperProblem
 
@@ -278,6 +298,9 @@ def cmd_identify(args) -> int:
     from rig_emulator.sweep import JobFailed, shutdown_pool
 
     problem, params, base = build(args)
+    for name, pp in getattr(args, "paper_priors_used", []):
+        print(f"prior {name} = {pp.mean:g} +- {pp.sigma:g} (the paper: {pp.where}; "
+              "--no-paper-priors leaves it out)")
     out = Path(args.output)
     if out.exists() and out.is_dir():
         raise UsageError(f"-o {out}: is a directory")
@@ -285,6 +308,10 @@ def cmd_identify(args) -> int:
         raise UsageError(f"-o {out}: the directory {out.parent} does not exist")
     if args.record and Path(args.record).resolve() == out.resolve():
         raise UsageError("--record and -o must be different files")
+    if getattr(args, "held_out", None):
+        if out.suffix == ".md":
+            raise UsageError("-o with --held-out: the JSON file (its markdown goes next to it as .md)")
+        return _held_out(args, params, base, out)
     try:
         result = identify(problem, params, record_path=args.record, workers=args.workers, scheduler=args.scheduler,
                           max_evals=args.max_evals, starts=args.starts, design_seed=args.seed,
@@ -315,6 +342,36 @@ def cmd_identify(args) -> int:
     if args.json:
         atomic_write_text(args.json, json.dumps(result_document(result, command, date), indent=1,
                                                 default=_json_default) + "\n")
+    return EXIT_OK
+
+
+def _held_out(args, params, base, out: Path) -> int:
+    from gcs_tools.identify import held_out
+    from gcs_tools.identify.fit import PAPER_FD_STEP
+    from protocol.atomic_file import atomic_write_text
+    from rig_emulator.config.loader import ConfigError
+    from rig_emulator.sweep import JobFailed, shutdown_pool
+
+    if args.scheduler:
+        raise UsageError("--held-out runs on local processes: drop --scheduler")
+    argv = getattr(args, "argv", None)
+    command = "rig-gcs " + shlex.join(argv if argv is not None else sys.argv[1:])
+    try:
+        doc = held_out.run(base, params, mode=args.held_out, seed=args.seed, seeds=args.paper_seeds,
+                           variant=args.paper_variant, starts=args.starts, max_evals=args.max_evals,
+                           fd_step=args.fd_step or PAPER_FD_STEP, tol=args.tol, workers=args.workers,
+                           show_progress=not args.no_progress)
+    except (JobFailed, ConfigError) as exc:
+        raise OperationError(str(exc)) from None
+    finally:
+        shutdown_pool()
+    doc["command"] = command
+    text = held_out.markdown(doc, command)
+    atomic_write_text(out, json.dumps(_finite(doc), indent=1, sort_keys=True) + "\n")
+    md = out.with_suffix(".md")
+    atomic_write_text(md, text + "\n")
+    print(text)
+    print(f"wrote {out} and {md} ({doc['evaluated_points']} points evaluated)")
     return EXIT_OK
 
 

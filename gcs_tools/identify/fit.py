@@ -226,8 +226,10 @@ def halton_design(n_params: int, count: int, seed: int) -> list[np.ndarray]:
 def identify(problem, params: list[Param], *, record_path=None, workers=None, scheduler=None,
              max_evals: int | None = None, starts: int = 0, design_seed: int = 0,
              fd_step: float = DEFAULT_FD_STEP, tol: float = DEFAULT_TOL, show_progress: bool = True,
-             stream=None) -> FitResult:
-    """Fit ``params`` to ``problem``'s targets (see the module docstring)."""
+             stream=None, record=None) -> FitResult:
+    """Fit ``params`` to ``problem``'s targets (see the module docstring). ``record``: an object with the
+    :class:`~gcs_tools.identify.record.Record` interface to use instead of one on ``record_path`` (the
+    held-out splits share their evaluations through one, :mod:`gcs_tools.identify.held_out`)."""
     if not params:
         raise ValueError("no parameter to fit")
     if not 0.0 < fd_step < 0.5:
@@ -243,19 +245,20 @@ def identify(problem, params: list[Param], *, record_path=None, workers=None, sc
         scheduler = own_client = Client(scheduler, timeout="30s")
     try:
         return _identify(problem, params, t0, record_path, workers, scheduler, max_evals, starts, design_seed,
-                         fd_step, tol, show_progress, stream)
+                         fd_step, tol, show_progress, stream, record)
     finally:
         if own_client is not None:
             own_client.close()
 
 
 def _identify(problem, params, t0, record_path, workers, scheduler, max_evals, starts, design_seed, fd_step, tol,
-              show_progress, stream) -> FitResult:
+              show_progress, stream, record=None) -> FitResult:
     from scipy.optimize import least_squares
 
     context = digest({"problem": problem.context(), "params": [p.describe() for p in params],
                       "emulator": emulator_fingerprint()})
-    record = Record(record_path, context)
+    if record is None:
+        record = Record(record_path, context)
     progress = _Progress(show_progress, stream)
     ev = Evaluator(problem, params, record, workers=workers, scheduler=scheduler, max_evals=max_evals,
                    progress=progress)
