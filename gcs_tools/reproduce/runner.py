@@ -71,6 +71,19 @@ class _Live(threading.Thread):
         self.progress.update(f"{self.exp.NAME} (MAVLink)")
 
 
+def _plugin_hint(exc, compared: tuple) -> str:
+    """What to do when a compared plug-in stops a run: the experiment it failed on, and how to leave it out."""
+    job = getattr(exc, "job", None)
+    if job is None or not job.controller or not job.label.startswith("controller/"):
+        return ""
+    from gcs_tools.reproduce.compare import EXPERIMENTS
+
+    exp = job.label.split("/")[1]
+    rest = [e for e in (compared or EXPERIMENTS) if e != exp]
+    return f"\n{job.controller} failed on the experiment {exp!r}; fix it there" + (
+        f", or compare on the others: --only {','.join(rest)}" if rest else "")
+
+
 def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=None, only=None, quick: bool = False,
               show_progress: bool = True, stream=None, plants=PLANTS, seeds: int = SEEDS,
               overrides=None, live: bool = True, controller: str | None = None,
@@ -179,7 +192,7 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
         try:
             results = run_jobs(jobs, workers=workers, scheduler=scheduler, progress=on_job)
         except (JobFailed, ConfigError) as exc:
-            raise OperationError(str(exc)) from None
+            raise OperationError(str(exc) + _plugin_hint(exc, compared)) from None
         except OSError as exc:  # e.g. a Dask scheduler that cannot be reached
             raise OperationError(f"running the simulations failed: {exc}") from None
         start_live()

@@ -1,6 +1,7 @@
 """rig-gcs reproduce --controller: a plug-in next to the paper's four controllers on every experiment
 it can fly, over the seeds, with figures, tables with the seed spread, verdicts and the runs saved;
-and the verdict rule on numbers made up for it."""
+the verdict rule on numbers made up for it; a plug-in that fails on one experiment is named with the
+way around it."""
 
 import contextlib
 import io
@@ -10,14 +11,24 @@ import math
 import pytest
 
 from gcs_tools.cli import main as gcs_main
-from gcs_tools.errors import UsageError
+from gcs_tools.errors import OperationError, UsageError
 from gcs_tools.reproduce import compare
 from gcs_tools.reproduce.compare import BETTER, SAME, WORSE, verdict
 from gcs_tools.reproduce.compare_figures import FILES
 from gcs_tools.reproduce.runner import reproduce
+from rig_emulator.controllers.examples.hover import LevelHover
 
 LQR = "rig_emulator.controllers.examples.lqr:LQRAttitude"
 PID = "rig_emulator.controllers.examples.pid:PID"
+
+
+class NeedsAPosition(LevelHover):
+    """LevelHover that stops where the scenario gives no position reference (the attitude-only experiments)."""
+
+    def update(self, t, obs):
+        if not all(math.isfinite(x) for x in obs.reference.position):
+            raise RuntimeError("no position reference")
+        return super().update(t, obs)
 
 
 @pytest.fixture(scope="module")
@@ -137,4 +148,15 @@ def test_a_refused_plugin_parameter_is_a_usage_error_before_anything_runs(tmp_pa
     with pytest.raises(UsageError, match=r"--controller: .*unknown parameter 'controller.params.kq'"):
         reproduce(tmp_path, quick=True, workers=1, show_progress=False, controller=LQR,
                   overrides={"controller.params.kq": 1.0})
+    assert not (tmp_path / "report.md").exists()
+
+
+def test_a_plugin_that_fails_on_one_experiment_is_named_with_the_way_around(tmp_path):
+    name = "tests.gcs_tools.reproduce.test_reproduce_controller:NeedsAPosition"
+    with pytest.raises(OperationError) as exc:
+        reproduce(tmp_path, quick=True, workers=1, show_progress=False, controller=name, plants=("hilms",), seeds=1,
+                  only=["harmonic", "helix"])
+    assert "RuntimeError: no position reference" in str(exc.value)
+    assert str(exc.value).endswith(f"{name} failed on the experiment 'harmonic'; fix it there, or compare on the "
+                                   "others: --only helix")
     assert not (tmp_path / "report.md").exists()
