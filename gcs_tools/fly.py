@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_tools.errors import OperationError
-from gcs_tools.link import Link
+from gcs_tools.link import COMMAND_TIMEOUT_S, Link
 from protocol.dialect import mavlink as M
 from protocol.frames import enu_to_ned, ned_to_enu
 from rig_emulator.guidance.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
@@ -37,6 +37,7 @@ POSITION_ONLY = (M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMA
 DEFAULT_SPEED = 0.5  # m/s, the rig's guidance.speed
 DEFAULT_MIN_LEG_TIME = 1.0  # s, the rig's guidance.min_leg_time
 DEFAULT_POSITION_HZ = 20.0
+NAN = math.nan
 PX4_OFFBOARD = 6  # PX4's main mode OFFBOARD (custom_mode = 6 << 16)
 
 
@@ -58,17 +59,36 @@ def send_target(link: Link, t_ms: int, enu) -> None:
                                                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-def start_offboard(link: Link, send_setpoint, attempts: int = 3) -> None:
-    """Switch the vehicle to OFFBOARD (DO_SET_MODE with PX4's custom mode 6) right after a
-    set-point from ``send_setpoint()``: PX4 enters OFFBOARD only while a set-point stream is
-    flowing. A refusal is retried with a new set-point; OperationError after ``attempts``."""
+def start_offboard(link: Link, send_setpoint, attempts: int = 3, timeout_s: float = COMMAND_TIMEOUT_S,
+                   period_s: float = 1.0 / DEFAULT_POSITION_HZ) -> None:
+    """Switch the vehicle to OFFBOARD (DO_SET_MODE with PX4's custom mode 6) while streaming
+    ``send_setpoint()`` every ``period_s`` (wall time), before and during the wait for the
+    answer: PX4 enters OFFBOARD only while a set-point stream flows, and leaves it again when
+    the stream pauses (COM_OF_LOSS_T), so the stream never waits for the command. A refusal
+    or a missing answer is retried; OperationError after ``attempts``."""
     result = None
-    for _ in range(attempts):
+    stale = link.stale_acks
+    for attempt in range(attempts):
         send_setpoint()
-        result = link.command(M.MAV_CMD_DO_SET_MODE, float(M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), float(PX4_OFFBOARD))
-        if result == M.MAV_RESULT_ACCEPTED:
-            return
-    name = M.enums["MAV_RESULT"][result].name if result in M.enums["MAV_RESULT"] else str(result)
+        link.mav.command_long_send(link.target_system, link.target_component, M.MAV_CMD_DO_SET_MODE, attempt,
+                                   float(M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), float(PX4_OFFBOARD),
+                                   0.0, NAN, NAN, NAN, NAN)
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            ack = link.recv("COMMAND_ACK", period_s,
+                            lambda m: m.command == M.MAV_CMD_DO_SET_MODE and stale.fresh(m))
+            send_setpoint()
+            if ack is None:
+                continue
+            stale.consumed(ack)
+            result = ack.result
+            if result == M.MAV_RESULT_IN_PROGRESS:
+                continue
+            if result == M.MAV_RESULT_ACCEPTED:
+                return
+            break
+    name = "no answer" if result is None else (
+        M.enums["MAV_RESULT"][result].name if result in M.enums["MAV_RESULT"] else str(result))
     raise OperationError(f"the vehicle refused OFFBOARD ({name}) with a set-point stream flowing")
 
 
@@ -96,6 +116,10 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
     reached: list[Reached] = []
     sp_pos, sp_vel = np.zeros(3), np.zeros(3)
     pos, t = _position(msg), msg.time_boot_ms * 1e-3
+    # the guidance functions run (and compile: seconds on a cold cache) before OFFBOARD, whose
+    # stream must not pause once it is entered
+    line_setpoint(t, t, leg_duration(*pos, *pts[0], speed, min_leg_time), *pos, *pts[0], sp_pos, sp_vel)
+    waypoint_reached(*pos, *pts[0], radii[0])
     hold = pos.copy()
     start_offboard(link, lambda: send_target(link, int(t * 1e3), hold))
     for i, (target, radius) in enumerate(zip(pts, radii)):
