@@ -13,7 +13,7 @@ from . import cf_vs_ahrs  # noqa: F401
 from . import mavlink_link, jitter, memory  # noqa: F401
 from . import many_rigs  # noqa: F401
 from . import plugins  # noqa: F401
-from . import px4_lockstep  # noqa: F401
+from . import px4_lockstep, ardupilot_json  # noqa: F401
 from . import served_max  # noqa: F401
 from .harness import REGISTRY
 

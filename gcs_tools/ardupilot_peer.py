@@ -286,6 +286,9 @@ def main(argv=None) -> int:
     link = JsonLink(host, int(port))
     try:
         log = fly(link, args.duration, HoverController(altitude_m=args.altitude))
+    except TimeoutError:
+        print(f"no answer from the physics at {args.url} to frame {link.frame_count} within 10 s", file=sys.stderr)
+        return 1
     finally:
         link.close()
     half = log.states[len(log.states) // 2:]

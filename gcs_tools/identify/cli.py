@@ -354,6 +354,9 @@ def _held_out(args, params, base, out: Path) -> int:
 
     if args.scheduler:
         raise UsageError("--held-out runs on local processes: drop --scheduler")
+    if args.record or args.json:
+        raise UsageError("--held-out writes its table to -o FILE.json and keeps its evaluations in memory: "
+                         "drop --record and --json")
     argv = getattr(args, "argv", None)
     command = "rig-gcs " + shlex.join(argv if argv is not None else sys.argv[1:])
     try:

@@ -200,7 +200,8 @@ def markdown(doc: dict, command: str | None = None) -> str:
         lines += [f"Command: `{command}`", ""]
     header = ["fit on", "predict", *[f"`{k}`" for k in keys], "in-sample rms log error (within x2)",
               "held-out rms log error (within x2)"]
-    rows = [["(the preset as it is, no refit; these settings)", "-", *["-"] * len(keys), _fig(doc["shipped"]["all"]), "-"]]
+    rows = [["(the preset as it is, no refit; these settings)", "-", *["-"] * len(keys),
+             _fig(doc["shipped"]["all"]), "-"]]
     for sp in doc["splits"]:
         rows.append([_groups_text(sp["fit_on"]), _groups_text(sp["predict"]),
                      *[_value(sp["values"][k]) for k in keys], _fig(sp["in_sample"]), _fig(sp["held_out"])])

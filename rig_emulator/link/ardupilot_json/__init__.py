@@ -1,0 +1,1 @@
+"""ArduPilot SITL in the loop: the rig as the physics of its JSON simulator interface (``serve --ardupilot-json``)."""

@@ -288,6 +288,10 @@ def test_the_held_out_command_writes_the_table_as_json_and_markdown(tmp_path, mo
 
     from gcs_tools.cli import main
 
+    assert main(["identify", "--paper", "--held-out", "logo", "--params", "flc.position_rate_share=0:1",
+                 "--record", str(tmp_path / "r.jsonl"), "-o", str(tmp_path / "x.json")]) == 2
+    assert "drop --record" in capsys.readouterr().err
+
     real_run = held_out.run
 
     def toy_run(base, params, **kw):  # the real machinery on the toy model: no simulation
