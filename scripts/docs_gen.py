@@ -1,0 +1,246 @@
+"""Write the generated parts of the documentation site into docs/generated/.
+
+Each file is made from the code that defines what it describes, so the reference cannot
+drift from the product: the command-line help from the argparse parsers of ``rig-emulator``
+and ``rig-gcs``, every parameter from the schema (rig_emulator/config/schema.py), its values
+on the shipped airframes and its MAVLink name (rig_emulator/link/parameters/table.py), the
+telemetry streams from their table (rig_emulator/link/telemetry/stream_table.py) and the
+rig's own messages and commands from the dialect (protocol/dialect/hilms.xml). The pages
+under docs/ include these files with ``--8<--`` (pymdownx.snippets).
+
+Usage (scripts/docs.sh runs it)::
+
+    python scripts/docs_gen.py            # (re)write docs/generated/
+    python scripts/docs_gen.py --check    # exit 1, naming the files, when a committed one differs
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import math
+import os
+import sys
+import xml.etree.ElementTree as ET
+from contextlib import redirect_stdout
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "docs" / "generated"
+HELP_WIDTH = "100"  # argparse wraps at $COLUMNS: fixed, so the pages do not depend on the terminal
+
+sys.path.insert(0, str(ROOT))
+
+
+# --- command-line help ---------------------------------------------------------------------------
+
+def _subparsers(parser: argparse.ArgumentParser):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return action
+    return None
+
+
+def _cli_page(parser: argparse.ArgumentParser, intro: str) -> str:
+    out = [intro, ""]
+
+    def walk(p: argparse.ArgumentParser, level: int) -> None:
+        out.append(f"{'#' * level} `{p.prog}`")
+        out.append("")
+        out.append("```text")
+        out.append(p.format_help().rstrip())
+        out.append("```")
+        out.append("")
+        sub = _subparsers(p)
+        if sub is not None:
+            for child in dict.fromkeys(sub.choices.values()):  # aliases point at the same parser
+                walk(child, min(level + 1, 4))
+
+    walk(parser, 2)
+    return "\n".join(out).rstrip() + "\n"
+
+
+def cli_pages() -> dict[str, str]:
+    os.environ["COLUMNS"] = HELP_WIDTH
+    from gcs_tools.cli import build_parser as gcs_parser
+    from rig_emulator.cli import build_parser as rig_parser
+
+    return {
+        "cli-rig-emulator.md": _cli_page(
+            rig_parser(), "Generated from `rig_emulator/cli.py`'s parser (`rig-emulator --help`, "
+                          "`rig-emulator COMMAND --help`). `rig-emulator` with no command is `rig-emulator serve`."),
+        "cli-rig-gcs.md": _cli_page(
+            gcs_parser(), "Generated from `gcs_tools/cli.py`'s parser (`rig-gcs --help`, `rig-gcs COMMAND --help`)."),
+    }
+
+
+# --- parameters ----------------------------------------------------------------------------------
+
+def _cell(text) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _value(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, (list, tuple)):
+        if v and isinstance(v[0], dict):
+            return f"{len(v)} entries"
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{}" if not v else f"{len(v)} keys"
+    if isinstance(v, str):
+        return f'"{v}"' if v else '""'
+    return repr(v).lower() if isinstance(v, bool) else repr(v)
+
+
+def parameters_page() -> str:
+    from rig_emulator.config.loader import load_config
+    from rig_emulator.config.schema import SCHEMA
+    from rig_emulator.link.parameters.table import EXCLUDED, build_table
+
+    hw = load_config(airframe="hilms")
+    ideal = load_config(airframe="hilms-ideal")
+    names: dict[str, list[str]] = {}
+    for p in build_table():
+        names.setdefault(p.key, []).append(p.name)
+
+    sections: dict[str, list[str]] = {}
+    for key, spec in SCHEMA.items():
+        section = key.split(".")[0]
+        mav = names.get(key, [])
+        if len(mav) > 3:
+            mav_text = f"`{mav[0]}` .. `{mav[-1]}`"
+        elif mav:
+            mav_text = ", ".join(f"`{n}`" for n in mav)
+        else:
+            mav_text = "not served" if key in EXCLUDED else "-"
+        default = _value(hw[key])
+        other = _value(ideal[key])
+        default_text = f"`{default}`" if default == other else f"`{default}` (hilms-ideal: `{other}`)"
+        doc = spec.doc
+        if spec.item:
+            doc += " Fields: " + "; ".join(
+                f"`{name}`{f' [{f.unit}]' if f.unit else ''}: {f.describe_values()}: {f.doc}"
+                for name, f in spec.item.items())
+        sections.setdefault(section, []).append(
+            f"| `{key}` | {_cell(spec.unit) or '-'} | {_cell(spec.describe_values())} | {_cell(default_text)} "
+            f"| {mav_text} | {_cell(doc)} |")
+    out = [
+        "Generated from `rig_emulator/config/schema.py` (key, unit, allowed values, description), the "
+        "presets of the airframes `hilms` (the default) and `hilms-ideal` (defaults; the ideal plant's "
+        "value is shown where it differs) and `rig_emulator/link/parameters/table.py` (the MAVLink "
+        "name; a list key is one MAVLink parameter per element). `rig-emulator params` lists the same "
+        "with the values of any configuration; `rig-gcs param list CONNECTION` a running rig's.",
+        "",
+    ]
+    for section, rows in sections.items():
+        out += [f"### `{section}`", "",
+                "| key | unit | allowed values | default | MAVLink | description |",
+                "| --- | --- | --- | --- | --- | --- |", *rows, ""]
+    return "\n".join(out).rstrip() + "\n"
+
+
+# --- MAVLink -------------------------------------------------------------------------------------
+
+def streams_page() -> str:
+    from protocol.dialect import mavlink as M
+    from rig_emulator.link.telemetry.stream_table import ON_REQUEST, STREAMS
+
+    groups = {getattr(M, n): n[len("MAV_DATA_STREAM_"):] for n in dir(M)
+              if n.startswith("MAV_DATA_STREAM_") and n != "MAV_DATA_STREAM_ENUM_END"}
+    rows = [f"| {s.name} | {s.msg_id} | {s.default_hz:g} | {groups.get(s.group, s.group)} |"
+            for s in sorted(STREAMS.values(), key=lambda s: (-s.default_hz, s.name))]
+    total = sum(s.default_hz for s in STREAMS.values())
+    extra = sorted(M.mavlink_map[i].msgname for i in ON_REQUEST if i not in STREAMS)
+    return "\n".join([
+        "Generated from `rig_emulator/link/telemetry/stream_table.py`. Rates are per second of simulated "
+        "time and per peer; `MAV_CMD_SET_MESSAGE_INTERVAL` changes one message for the asking peer, "
+        "`REQUEST_DATA_STREAM` a whole group. HEARTBEAT (not in the table) goes out at 1 Hz of wall-clock time.",
+        "",
+        "| message | id | default rate (Hz) | REQUEST_DATA_STREAM group |",
+        "| --- | --- | --- | --- |",
+        *rows,
+        "",
+        f"In all {total:g} messages per simulated second at the default rates, plus HEARTBEAT.",
+        "",
+        "Sent once on `MAV_CMD_REQUEST_MESSAGE` besides the streams above: "
+        + ", ".join(extra) + ".",
+    ]) + "\n"
+
+
+def _text(el) -> str:
+    return " ".join((el.text or "").split()) if el is not None else ""
+
+
+def dialect_page() -> str:
+    root = ET.parse(ROOT / "protocol" / "dialect" / "hilms.xml").getroot()
+    out = ["Generated from `protocol/dialect/hilms.xml` (its own definitions; it includes "
+           "`development.xml`, hence `common.xml`, and `component_metadata.xml`).", ""]
+    out += ["### Messages", ""]
+    for msg in root.iter("message"):
+        out += [f"#### {msg.get('name')} ({msg.get('id')})", "", _text(msg.find("description")), "",
+                "| field | type | unit | description |", "| --- | --- | --- | --- |"]
+        for f in msg.findall("field"):
+            enum = f" (`{f.get('enum')}`)" if f.get("enum") else ""
+            out.append(f"| `{f.get('name')}` | {f.get('type')} | {f.get('units') or '-'} "
+                       f"| {_cell(_text(f))}{enum} |")
+        out.append("")
+    out += ["### Commands", ""]
+    for enum in root.iter("enum"):
+        if enum.get("name") != "MAV_CMD":
+            continue
+        for entry in enum.findall("entry"):
+            out += [f"#### {entry.get('name')} ({entry.get('value')})", "", _text(entry.find("description")), "",
+                    "| param | label | unit | description |", "| --- | --- | --- | --- |"]
+            for p in entry.findall("param"):
+                out.append(f"| {p.get('index')} | {p.get('label') or '-'} | {p.get('units') or '-'} "
+                           f"| {_cell(_text(p))} |")
+            out.append("")
+    out += ["### Enums", ""]
+    for enum in root.iter("enum"):
+        if enum.get("name") == "MAV_CMD":
+            continue
+        bitmask = " (bitmask)" if enum.get("bitmask") == "true" else ""
+        out += [f"#### {enum.get('name')}{bitmask}", "", _text(enum.find("description")), "",
+                "| value | name | description |", "| --- | --- | --- |"]
+        for entry in enum.findall("entry"):
+            out.append(f"| {entry.get('value')} | `{entry.get('name')}` | {_cell(_text(entry.find('description')))} |")
+        out.append("")
+    return "\n".join(out).rstrip() + "\n"
+
+
+# --- all -----------------------------------------------------------------------------------------
+
+def pages() -> dict[str, str]:
+    with redirect_stdout(io.StringIO()):  # importing the link layer may print nothing, but keep stdout ours
+        result = {**cli_pages(), "parameters.md": parameters_page(), "mavlink-streams.md": streams_page(),
+                  "dialect.md": dialect_page()}
+    return result
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--check", action="store_true",
+                    help="compare with the committed files instead of writing them; exit 1 on a difference")
+    args = ap.parse_args(argv)
+    stale = []
+    for name, text in pages().items():
+        path = OUT / name
+        if args.check:
+            if not path.exists() or path.read_text() != text:
+                stale.append(name)
+        else:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            if not path.exists() or path.read_text() != text:
+                path.write_text(text)
+                print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+    if stale:
+        print("docs_gen: out of date (run `bash scripts/docs.sh` and commit): "
+              + ", ".join(f"docs/generated/{n}" for n in stale), file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
