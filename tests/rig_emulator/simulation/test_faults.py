@@ -1,7 +1,7 @@
 """Faults from the config (issue 9): the degradation docs/FAULTS.md states, headless.
 
 Each run injects its fault at t = 5 s through ``faults.events``; the bounds are the measured
-figures of docs/FAULTS.md (scripts/measure_faults.py, seeds 0-2) with a margin.
+figures of docs/FAULTS.md (python -m gcs_tools.studies faults, seeds 0-2) with a margin.
 """
 
 import functools

@@ -1,6 +1,6 @@
 """Measure how the rig degrades under each fault (the figures of docs/FAULTS.md).
 
-Run from the repository root: ``.venv/bin/python scripts/measure_faults.py [--seeds 0 1 2]``.
+Run from the repository root: ``python -m gcs_tools.studies faults [--seeds 0 1 2]``.
 Every case is a headless run of a scenario preset with one config fault event at
 ``t = 5 s`` (``faults.events``); figures are taken from 5 s until the loss-of-control
 failsafe trips (or the end of the run), and the worst over the seeds is printed:

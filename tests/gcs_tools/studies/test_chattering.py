@@ -1,10 +1,10 @@
-"""scripts/chattering_study.py: the effects it toggles are exactly where hilms and hilms-ideal differ,
+"""gcs_tools.studies.chattering: the effects it toggles are exactly where hilms and hilms-ideal differ,
 and its band shares put a sine's power in its band."""
 
 import numpy as np
 
 from rig_emulator.config.loader import load_config
-from scripts import chattering_study as study
+from gcs_tools.studies import chattering as study
 
 
 def test_the_effects_are_the_keys_the_two_airframes_differ_on():

@@ -2,8 +2,8 @@
 shows in hover with shocks"; docs/REPRODUCTION.md, "The chattering verdicts read the angles; the FLC's
 chattering on the hardware rig").
 
-    python scripts/chattering_study.py [--seeds 3] [--workers 2]
-    python scripts/chattering_study.py --delay-scan [--seeds 3] [--workers 2]
+    python -m gcs_tools.studies chattering [--seeds 3] [--workers 2]
+    python -m gcs_tools.studies chattering --delay-scan [--seeds 3] [--workers 2]
 
 Runs the reproduction's ``hover-shocks`` job (SMC and FLC, 20 s, 500 Hz log) on four kinds of plant:
 ``hilms-ideal``; ``hilms-ideal`` plus one effect (or reading) of ``hilms``; ``hilms`` minus one (that

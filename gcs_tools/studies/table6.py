@@ -2,13 +2,13 @@
 equal (0.2279 / 0.2263 m), and the rectangle's ME Y (docs/REPRODUCTION.md, "Table 6's altitude:
 the jump at t = 12 s through the mixer").
 
-    python scripts/table6_study.py candidates --priority attitude [--workers N]   # each candidate switched off
-    python scripts/table6_study.py candidates --priority thrust [--workers N]     # the same, the shipped mixer
-    python scripts/table6_study.py candidates --priority clip --shipped-only   # per-motor clipping, first row
-    python scripts/table6_study.py priority [--workers N]     # the allocation's priority x CoG height
-    python scripts/table6_study.py priority --priorities clip --cog-mm 0,10,20   # the third reading
-    python scripts/table6_study.py bias [--workers N]         # the common thrust bias: both Z within x2?
-    python scripts/table6_study.py rectangle [--workers N]    # the rectangle's ME X / Y per leg direction
+    python -m gcs_tools.studies table6 candidates --priority attitude [--workers N]   # each candidate switched off
+    python -m gcs_tools.studies table6 candidates --priority thrust [--workers N]     # the same, the shipped mixer
+    python -m gcs_tools.studies table6 candidates --priority clip --shipped-only   # per-motor clipping, first row
+    python -m gcs_tools.studies table6 priority [--workers N]     # the allocation's priority x CoG height
+    python -m gcs_tools.studies table6 priority --priorities clip --cog-mm 0,10,20   # the third reading
+    python -m gcs_tools.studies table6 bias [--workers N]         # the common thrust bias: both Z within x2?
+    python -m gcs_tools.studies table6 rectangle [--workers N]    # the rectangle's ME X / Y per leg direction
 
 Every row is the mean over seeds 0-2 of the 60 s helix (Eq. 46) on ``hilms`` with the named
 overrides (``candidates``: on top of ``control.allocation_priority`` = ``--priority``, default

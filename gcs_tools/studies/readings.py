@@ -6,8 +6,8 @@ reading on its own, no hardware effects); every experiment of ``rig-gcs reproduc
 under it (headless; the rectangle's verdicts from its headless twin) and its verdicts are
 counted. Prints the markdown table (and writes it with ``--markdown FILE``)::
 
-    .venv/bin/python scripts/readings_table.py -o /tmp/readings            # seed 0, all readings
-    .venv/bin/python scripts/readings_table.py -o /tmp/readings --seeds 3 --plant hilms-ideal
+    python -m gcs_tools.studies readings -o /tmp/readings            # seed 0, all readings
+    python -m gcs_tools.studies readings -o /tmp/readings --seeds 3 --plant hilms-ideal
 
 Readings (docs/REPRODUCTION.md, "Readings of Eq. 41 and of the motor ceiling"):
 
@@ -113,7 +113,7 @@ def main(argv=None) -> int:
         columns.append(PlantRuns(label, col.airframe, col.overrides, col.sections))
         print(f"[{i + 1}/{len(chosen)}] {label}: done", file=sys.stderr, flush=True)
     text = (f"Readings on the plant `{args.plant}`, seed(s) {args.seed}..{args.seed + args.seeds - 1} "
-            f"(`scripts/readings_table.py`; the rectangle's verdicts from its headless run):\n\n"
+            f"(`python -m gcs_tools.studies readings`; the rectangle's verdicts from its headless run):\n\n"
             + plants_markdown(columns, args.seeds) + "\n")
     print(text)
     if args.markdown:

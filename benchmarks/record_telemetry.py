@@ -1,6 +1,6 @@
 """Record the telemetry a served rig sends, deterministically, to compare two versions byte for byte.
 
-Run from the repository root: ``.venv/bin/python scripts/record_telemetry.py OUT.txt [--sim-s S]``,
+Run from the repository root: ``.venv/bin/python -m benchmarks.record_telemetry OUT.txt [--sim-s S]``,
 then ``cmp`` two outputs (or ``--compare A B``). Used to show that a change of the serve
 loop's speed (issue 14: lazy snapshot, scalar builders, ...) left every message as it was.
 

@@ -2,8 +2,8 @@
 
 Run from the repository root::
 
-    .venv/bin/python scripts/lossy_link.py                    # 20 % loss each way, 10 % duplicated, 10 % re-ordered, 20-50 ms
-    .venv/bin/python scripts/lossy_link.py --rounds 5 --drop 0.3 --retries 5
+    .venv/bin/python -m benchmarks.lossy_link                    # 20 % loss each way, 10 % duplicated, 10 % re-ordered, 20-50 ms
+    .venv/bin/python -m benchmarks.lossy_link --rounds 5 --drop 0.3 --retries 5
 
 A rig (:class:`rig_emulator.testing.rig.RigThread`, speed-up 1, a ``udpin`` endpoint) behind
 :class:`rig_emulator.testing.relay.LossyRelay`; each round, with gcs_tools' clients and

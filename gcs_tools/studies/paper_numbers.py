@@ -2,10 +2,10 @@
 over seeds 0-2 (docs/REPRODUCTION.md, "The position FLC's rate share", "Table 6's yaw" and "The
 actuation delay").
 
-    python scripts/paper_numbers_scan.py rate-share [--values 0.2,0.25,...] [--workers N]
-    python scripts/paper_numbers_scan.py yaw [--values 0.005,0.03,0.06] [--set KEY=VALUE ...]
-    python scripts/paper_numbers_scan.py delay [--values 0.006,0.01,...] [--set KEY=VALUE ...]
-    python scripts/paper_numbers_scan.py point [--set KEY=VALUE ...]     # one setting, all 18 numbers
+    python -m gcs_tools.studies paper-numbers rate-share [--values 0.2,0.25,...] [--workers N]
+    python -m gcs_tools.studies paper-numbers yaw [--values 0.005,0.03,0.06] [--set KEY=VALUE ...]
+    python -m gcs_tools.studies paper-numbers delay [--values 0.006,0.01,...] [--set KEY=VALUE ...]
+    python -m gcs_tools.studies paper-numbers point [--set KEY=VALUE ...]     # one setting, all 18 numbers
 
 Every point runs the job list of ``rig-gcs identify --paper`` (the reproduction's own sweep, helix
 and rectangle runs: 29 headless runs a seed) with the setting as an override, so its numbers are the

@@ -2,8 +2,8 @@
 
 Run from the repository root::
 
-    .venv/bin/python scripts/soak.py                       # 3600 simulated s as fast as the host allows
-    .venv/bin/python scripts/soak.py --sim-seconds 600 --speedup 20 --out /tmp/soak
+    .venv/bin/python -m benchmarks.soak                       # 3600 simulated s as fast as the host allows
+    .venv/bin/python -m benchmarks.soak --sim-seconds 600 --speedup 20 --out /tmp/soak
 
 Starts ``rig-emulator serve`` (a real process, TCP endpoint on a free port) and attaches:
 

@@ -2,8 +2,8 @@
 
 Run from the repository root::
 
-    .venv/bin/python scripts/fuzz_link.py                       # 100,000 UDP datagrams + 10,000 frames on TCP
-    .venv/bin/python scripts/fuzz_link.py --frames 20000 --tcp-frames 0 --seed 7
+    .venv/bin/python -m benchmarks.fuzz_link                       # 100,000 UDP datagrams + 10,000 frames on TCP
+    .venv/bin/python -m benchmarks.fuzz_link --frames 20000 --tcp-frames 0 --seed 7
 
 Starts ``rig-emulator serve --speedup 1`` with a ``tcpin`` and a ``udpin`` endpoint on free
 ports (:class:`rig_emulator.testing.rig.RigProcess`), then

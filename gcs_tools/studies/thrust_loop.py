@@ -1,8 +1,8 @@
 """The load-cell thrust loop's study (docs/REPRODUCTION.md, "The load-cell thrust loop"): Fig. 17's
 altitude error early vs late per time constant and seed, and what a faulted load cell does to it.
 
-    python scripts/thrust_loop_study.py altitude 0 5 20 60 100 200 500 1000
-    python scripts/thrust_loop_study.py faults
+    python -m gcs_tools.studies thrust-loop altitude 0 5 20 60 100 200 500 1000
+    python -m gcs_tools.studies thrust-loop faults
 
 The claim verdicts and the Table 4 / Table 6 / Fig. 19 numbers per time constant come from
 ``rig-gcs reproduce -o DIR --plant hilms --seeds 3 --set motors.thrust_loop_time_constant=T``.
@@ -59,10 +59,14 @@ def faults():
                   f"{int(np.max(log[:, L.FAILSAFE]))} |", flush=True)
 
 
-if __name__ == "__main__":
+def main() -> None:
     if len(sys.argv) >= 2 and sys.argv[1] == "altitude":
         altitude([float(a) for a in sys.argv[2:]] or [0.0, 200.0])
     elif len(sys.argv) == 2 and sys.argv[1] == "faults":
         faults()
     else:
         sys.exit(__doc__)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,7 +1,7 @@
 """Issue 16's plug-in figures in one process, on the warm numba cache of this checkout.
 
-    python scripts/measure_plugins.py speed [--duration 20]     # real-time factors, wall and CPU
-    python scripts/measure_plugins.py pid-equivalence           # PID plug-in vs built-in, 60 s helix
+    python -m benchmarks.measure_plugins speed [--duration 20]     # real-time factors, wall and CPU
+    python -m benchmarks.measure_plugins pid-equivalence           # PID plug-in vs built-in, 60 s helix
 
 ``speed``: per case, one warm-up run then three timed runs of ``--duration`` simulated
 seconds (1 kHz physics, 500 Hz control, full sensing chain): the real-time factor by wall

@@ -1,6 +1,6 @@
 """Where a served rig's time goes at ``--speedup max`` with one UDP client (issue 14).
 
-Run from the repository root: ``.venv/bin/python scripts/profile_served.py [WALL_S] [--airframe NAME]``.
+Run from the repository root: ``.venv/bin/python -m benchmarks.profile_served [WALL_S] [--airframe NAME]``.
 
 In this process: a :class:`~rig_emulator.link.server.RigServer` on ``udpin:127.0.0.1:0`` at
 speed-up 0 (as fast as possible, the serve loop's 20 ms chunks); in a subprocess: the
