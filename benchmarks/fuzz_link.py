@@ -1,4 +1,4 @@
-"""Fuzz a real rig process over real sockets and print the figures (issue 9, part A).
+"""Fuzz a real rig process over real sockets and print the figures.
 
 Run from the repository root::
 

@@ -1,4 +1,4 @@
-"""rig-gcs over a lossy, laggy, duplicating, re-ordering link, repeated, with figures (issue 9, part B).
+"""rig-gcs over a lossy, laggy, duplicating, re-ordering link, repeated, with figures.
 
 Run from the repository root::
 

@@ -8,7 +8,7 @@ seconds (1 kHz physics, 500 Hz control, full sensing chain): the real-time facto
 clock and by the CPU time of the stepping thread (the machine's other load inflates the
 latter far less; both are printed with the load average). Cases: the built-in ``pid``
 strategy (helix), the PID example compiled and as Python (helix), a trivial plain-Python
-controller and a trivial compiled one (hover thrust, no torque; hover). Targets (issue 16):
+controller and a trivial compiled one (hover thrust, no torque; hover). Targets:
 >= 50x for the trivial Python controller, >= 300x for a compiled one.
 
 ``pid-equivalence``: the 60 s helix, seed 0, built-in ``pid`` against

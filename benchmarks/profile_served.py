@@ -1,4 +1,4 @@
-"""Where a served rig's time goes at ``--speedup max`` with one UDP client (issue 14).
+"""Where a served rig's time goes at ``--speedup max`` with one UDP client.
 
 Run from the repository root: ``.venv/bin/python -m benchmarks.profile_served [WALL_S] [--airframe NAME]``.
 

@@ -2,7 +2,7 @@
 
 Run from the repository root: ``.venv/bin/python -m benchmarks.record_telemetry OUT.txt [--sim-s S]``,
 then ``cmp`` two outputs (or ``--compare A B``). Used to show that a change of the serve
-loop's speed (issue 14: lazy snapshot, scalar builders, ...) left every message as it was.
+loop's speed (a lazy snapshot, scalar builders, ...) left every message as it was.
 
 In this process, with no socket and no wall clock: a :class:`~rig_emulator.link.server.RigServer`
 at speed-up 0 in the serve loop's chunks at ``--speedup max`` (``chunk_seconds(5 ms, 0)``),

@@ -1,4 +1,4 @@
-"""Soak: one simulated hour of the rig with telemetry, a logger and repeated mission uploads (issue 9, part C).
+"""Soak: one simulated hour of the rig with telemetry, a logger and repeated mission uploads.
 
 Run from the repository root::
 

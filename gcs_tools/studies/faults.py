@@ -1,4 +1,4 @@
-"""Measure how the rig degrades under each fault (the figures of docs/FAULTS.md).
+"""Measure how the rig degrades under each fault (the figures of docs/how-to/faults.md).
 
 Run from the repository root: ``python -m gcs_tools.studies faults [--seeds 0 1 2]``.
 Every case is a headless run of a scenario preset with one config fault event at

@@ -1,5 +1,5 @@
 """The paper's 18 numbers (Table 4, Table 6, Fig. 19) on ``hilms`` over a scan of one setting, mean
-over seeds 0-2 (docs/REPRODUCTION.md, "The position FLC's rate share", "Table 6's yaw" and "The
+over seeds 0-2 (docs/explanation/readings.md, "The position FLC's rate share", "Table 6's yaw" and "The
 actuation delay").
 
     python -m gcs_tools.studies paper-numbers rate-share [--values 0.2,0.25,...] [--workers N]

@@ -1,5 +1,5 @@
 """Why Table 6's FLC altitude error is 2.4x the SMC-FLC's on the hardware rig, where the paper's are
-equal (0.2279 / 0.2263 m), and the rectangle's ME Y (docs/REPRODUCTION.md, "Table 6's altitude:
+equal (0.2279 / 0.2263 m), and the rectangle's ME Y (docs/explanation/readings.md, "Table 6's altitude:
 the jump at t = 12 s through the mixer").
 
     python -m gcs_tools.studies table6 candidates --priority attitude [--workers N]   # each candidate switched off

@@ -128,7 +128,7 @@ SCHEMA: dict[str, Spec] = {
     "motors.thrust_ceiling_grf": F("thrust ceiling per motor (Sec. 3-2)", "gr.F", 0.0, 1e5, lo_open=True),
     "motors.time_constant": F("first-order lag from voltage command to thrust", "s", 0.0, 10.0),
     "motors.kf": F("rotor thrust coefficient kF, F = kF Omega^2 (Eq. 38)", "N s^2/rad^2", 0.0, 1.0, lo_open=True),
-    # hardware effects of the motor chain (issue 13, physics/hardware.py; neutral values = the ideal plant)
+    # hardware effects of the motor chain (physics/hardware.py; neutral values = the ideal plant)
     "motors.thrust_gain": FS("true thrust / Eq. 40 thrust per motor 1..4 (motor and propeller mismatch times "
                              "the common thrust-chain gain); 1 = Eq. 40", "", 0.5, 1.5, 4),
     "motors.thrust_bias_grf": F("common additive thrust bias of every running motor (0 = none)", "gr.F", -200.0, 200.0),
@@ -336,7 +336,7 @@ SCHEMA: dict[str, Spec] = {
                                    "of first-order coloured noise (0 = none)", "N m", 0.0, 10.0),
     "disturbance.torque_noise_corner_hz": F("corner frequency of the random body torque", "Hz", 0.0, 500.0,
                                             lo_open=True),
-    # --- the spherical joint and the frame (issue 13) ----------------------------------------------
+    # --- the spherical joint and the frame ----------------------------------------------
     "joint.viscous": V3("viscous friction of the spherical joint per body axis", "N m s/rad", 0.0, 10.0),
     "joint.coulomb": V3("Coulomb friction of the spherical joint per body axis", "N m", 0.0, 10.0),
     "joint.coulomb_smoothing": F("body rate over which the Coulomb friction is smoothed (tanh(w / this))", "rad/s",

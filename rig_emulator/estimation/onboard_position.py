@@ -12,7 +12,7 @@ from rig_emulator._jit import jit
 from rig_emulator.control.thrust_direction import thrust_direction
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def onboard_translation_step(dt, phi, theta, psi, u1, mass, g, fwx, fwy, fwz, ground, state):
     """Advance ``state`` = (position 0:3, velocity 3:6) by ``dt`` (world ENU)."""
     ux, uy, uz = thrust_direction(phi, theta, psi)

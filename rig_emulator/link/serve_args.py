@@ -87,4 +87,4 @@ def add_serve_args(p: argparse.ArgumentParser) -> None:
                         "be signed with the key (RADIO_STATUS excepted), else it is dropped and counted. "
                         "Other users can see command lines: prefer --signing-key-file")
     g.add_argument("--signing-key-file", metavar="PATH", help="a file whose first line is the KEY of --signing-key")
-    add_px4_args(p)  # issue 16: a flight stack in the loop
+    add_px4_args(p)  # a flight stack in the loop

@@ -17,7 +17,7 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     through one call site. A call of a compiled function passes every field of every array
     and namedtuple argument one by one (numba flattens them), and ``p`` with its hardware
     parameters is some 130 values: as calls, the five per step cost the ideal plant about a
-    fifth of its step (benchmarks/README.md, hardware-rig). The stage state of k1 is a copy
+    fifth of its step (docs/explanation/performance.md, hardware-rig). The stage state of k1 is a copy
     of ``x`` (the same values), so the arithmetic is that of the four separate calls.
     """
     n = x.shape[0]
@@ -62,7 +62,7 @@ def apply_ground(x, p):
 
     Reading: the HILMS integrates a free-flying vehicle; the ground only keeps a thrust
     deficit at start-up from sending the virtual vehicle below its take-off altitude. It is
-    frictionless, so a tilted thrust still moves the vehicle horizontally. Reading (issue 9):
+    frictionless, so a tilted thrust still moves the vehicle horizontally. Reading:
     with the motors (nearly) stopped - total thrust below ``REST_THRUST_FRACTION`` of the
     weight, e.g. after a disarm or the loss-of-control failsafe - a vehicle on the ground
     rests instead of sliding on for ever.
