@@ -259,6 +259,40 @@ def table6_page() -> str:
     return "\n".join(out) + "\n"
 
 
+# --- benchmark results (expensive: written from a results file of `python -m benchmarks`) -----------
+
+def benchmarks_page(results_path: Path, command: str) -> str:
+    import json
+
+    sys.path.insert(0, str(ROOT))
+    from benchmarks.harness import format_value
+
+    doc = json.loads(Path(results_path).read_text())
+    meta, settings = doc["meta"], doc["settings"]
+    out = [f"Written by `python scripts/docs_gen.py --benchmarks FILE.json --benchmarks-command '{command}'` "
+           f"from the results of `{command}`: {settings['repeat']} fresh-process repetitions per probe, medians "
+           f"and min..max over them. Machine: {meta.get('cpu')} x{meta.get('cpu_count')}, Python "
+           f"{meta.get('python')}, load average {meta.get('loadavg_start')} at the start and "
+           f"{meta.get('loadavg_end')} at the end (other work shares the cores: a ratio against a "
+           "reference measured in the same repetition is the figure to read).", "",
+           "| benchmark | metric | median | min..max | unit | reference | target |",
+           "| --- | --- | --- | --- | --- | --- | --- |"]
+    for name, entry in doc["benchmarks"].items():
+        if entry["status"] != "ok":
+            out.append(f"| {name} | failed: {_cell(entry.get('error', ''))} | | | | | |")
+            continue
+        for m in entry["metrics"]:
+            spread = "" if m["low"] is None or m["high"] is None else \
+                f"{format_value(m['low'])}..{format_value(m['high'])}"
+            targets = "; ".join(
+                f"{t['op']} {format_value(t['value'])}: "
+                f"{'met' if (m['value'] >= t['value'] if t['op'] == '>=' else m['value'] <= t['value']) else 'NOT met'}"
+                for t in m["targets"] if m["value"] is not None)
+            out.append(f"| {name} | {_cell(m['name'])} | {format_value(m['value'])} | {spread} | {_cell(m['unit'])} "
+                       f"| {_cell(m['reference'] or '')} | {_cell(targets)} |")
+    return "\n".join(out) + "\n"
+
+
 # --- all -----------------------------------------------------------------------------------------
 
 def pages() -> dict[str, str]:
@@ -273,7 +307,16 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--check", action="store_true",
                     help="compare with the committed files instead of writing them; exit 1 on a difference")
+    ap.add_argument("--benchmarks", metavar="FILE.json",
+                    help="also write docs/generated/benchmarks.md from this `python -m benchmarks` results file")
+    ap.add_argument("--benchmarks-command", default="python -m benchmarks",
+                    help="the command that made --benchmarks' file, quoted on the page")
     args = ap.parse_args(argv)
+    if args.benchmarks:
+        path = OUT / "benchmarks.md"
+        path.write_text(benchmarks_page(Path(args.benchmarks), args.benchmarks_command))
+        print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
     stale = []
     for name, text in pages().items():
         path = OUT / name

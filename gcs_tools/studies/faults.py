@@ -100,20 +100,20 @@ def _all_tables(seeds, common):
     head = HEAD
     imu_modes = (("stuck", 0.0), ("dead", 0.0), ("bias", 3000.0), ("noise", 50.0))
 
-    print(f"IMU modules (hover, smc-flc, robust_mean ensemble; seeds {seeds})\n{head}")
+    print(f"**IMU modules** (hover, smc-flc, robust_mean ensemble; seeds {seeds})\n\n{head}")
     for n in (1, 2, 3):
         for mode, mag in imu_modes:
             ev = _events("imu", range(n), mode, mag)
             print(f"| {n} x {mode} {mag:g} |", case("hover", "smc-flc", ev, seeds, common)[2:])
-    print(f"\nIMU modules while moving (harmonic attitude, smc-flc; seeds {seeds})\n{head}")
+    print(f"\n**IMU modules while moving** (harmonic attitude, smc-flc; seeds {seeds})\n\n{head}")
     for mode, mag in imu_modes:
         print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds, common)[2:])
-    print(f"\nsame, plain mean ensemble (the paper's)\n{head}")
+    print(f"\n**The same, plain mean ensemble** (the paper's)\n\n{head}")
     for mode, mag in imu_modes:
         print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds,
                                                {**common, "estimation.ensemble": "mean"})[2:])
 
-    print(f"\nload cells (hover, smc-flc; seeds {seeds})\n{head}")
+    print(f"\n**Load cells** (hover, smc-flc; seeds {seeds})\n\n{head}")
     for mode, mag in (("dead", 0.0), ("spike", 200.0), ("stuck", 0.0)):
         print(f"| cell 2 {mode} {mag:g} |", case("hover", "smc-flc", _events("load_cell", [2], mode, mag), seeds, common)[2:])
 
@@ -121,7 +121,7 @@ def _all_tables(seeds, common):
 
 
 def _motor_table(seeds, common):
-    print(f"\nmotor 1 thrust loss (hover; seeds {seeds}; {common or 'preset'})\n{HEAD}")
+    print(f"\n**Motor 1 thrust loss** (hover; seeds {seeds}; {common or 'preset'})\n\n{HEAD}")
     for strategy in ("smc-flc", "flc", "pid"):
         for loss in (0.1, 0.2, 0.3, 0.5, 1.0):
             ev = _events("motor", [1], "thrust_loss", loss)
