@@ -165,7 +165,7 @@ SCHEMA: dict[str, Spec] = {
     "control.allocation_priority": S("what gives way when the A6 inverse leaves a motor outside [0, its ceiling]: "
                                      "'attitude' roll/pitch kept, the collective u1 shifted to fit (ideal plant); "
                                      "'thrust' u1 kept, the roll/pitch differential scaled down (Sec. 3-3 computes u1 "
-                                     "first; docs/REPRODUCTION.md, \"Table 6's altitude\"); 'clip' no priority, each motor clipped "
+                                     "first; docs/explanation/readings.md); 'clip' no priority, each motor clipped "
                                      "to [0, its ceiling] on its own (a plain firmware: Sec. 3-3's A6 and Eq. 40 "
                                      "inverses, the supply capping each motor)", ("attitude", "thrust", "clip")),
     "control.actuation_delay": F("sensing-to-actuation delay: computation, PWM frame, ESC update; rounded to whole "
@@ -177,7 +177,7 @@ SCHEMA: dict[str, Spec] = {
     "controller_model.thrust_per_volt_scale": F("the Eq. 40 slope the controllers invert / the true one (1 = exact)",
                                                 "", 0.1, 10.0),
     "smc.gain_reading": S("unit of Eq. 41's K: 'si' rad/s^2 (K as printed), 'thrust' a thrust difference in N "
-                          "(switching torque K l, yaw K kM/kF), 'torque' a torque in N m (docs/REPRODUCTION.md)",
+                          "(switching torque K l, yaw K kM/kF), 'torque' a torque in N m (docs/explanation/readings.md)",
                           ("si", "thrust", "torque")),
     "smc.lambda_reading": S("unit of Eq. 41's lambda: 'si' 1/s, 'deg' applied to angles in degrees against rates "
                             "in rad/s (lambda 180/pi in SI), 'time-constant' seconds (1/lambda in SI)",
@@ -288,7 +288,7 @@ SCHEMA: dict[str, Spec] = {
     "sensor_models.estimation": Spec("tree", "overrides of presets/sensors/estimation.toml (calibration procedure, guards, Kalman)"),
     "faults.events": Spec(
         "table_list",
-        "device faults switched on at a time (docs/FAULTS.md): IMU modules, load cells, motors",
+        "device faults switched on at a time (docs/how-to/faults.md): IMU modules, load cells, motors",
         item={
             "t": F("when the fault starts", "s", 0.0),
             "sensor": S("which kind of device", ("imu", "load_cell", "motor")),
