@@ -293,6 +293,31 @@ def benchmarks_page(results_path: Path, command: str) -> str:
     return "\n".join(out) + "\n"
 
 
+# --- the reproduction's summary (expensive: written from a `rig-gcs reproduce` output) --------------
+
+def reproduce_page(out_dir: Path, command: str, timing: Path | None) -> str:
+    import json
+
+    report = (Path(out_dir) / "report.md").read_text()
+    head = "## The paper, the hardware rig and the ideal plant side by side"
+    if head not in report:
+        raise SystemExit(f"docs_gen: {out_dir}/report.md has no section {head!r} (run reproduce on both plants)")
+    body = report.split(head, 1)[1].split("\n## ", 1)[0].strip()
+    lines = body.splitlines()
+    body = "\n".join(ln for ln in lines if not ln.startswith("The verdicts and sections below are"))
+    when = ""
+    if timing is not None:
+        t = json.loads(Path(timing).read_text())
+        runs = t.get("headless_runs", t.get("runs"))
+        parts = [f"{runs} headless runs" if runs is not None else "",
+                 f"{t['wall_s']:.1f} s wall" if "wall_s" in t else "",
+                 f"{t['cpu_s']:.1f} s CPU" if "cpu_s" in t else ""]
+        machine = t.get("machine") or ""
+        when = (" It took " + ", ".join(p for p in parts if p) + (f" on {machine}" if machine else "") + ".")
+    return (f"Written by `python scripts/docs_gen.py --reproduce DIR` from the report of `{command}`"
+            f" (`DIR/report.md`, its first table).{when}\n\n{body}\n")
+
+
 # --- all -----------------------------------------------------------------------------------------
 
 def pages() -> dict[str, str]:
@@ -311,7 +336,18 @@ def main(argv=None) -> int:
                     help="also write docs/generated/benchmarks.md from this `python -m benchmarks` results file")
     ap.add_argument("--benchmarks-command", default="python -m benchmarks",
                     help="the command that made --benchmarks' file, quoted on the page")
+    ap.add_argument("--reproduce", metavar="DIR", help="also write docs/generated/reproduce-summary.md from the "
+                                                      "output directory of a full `rig-gcs reproduce -o DIR`")
+    ap.add_argument("--reproduce-command", default="rig-gcs reproduce -o DIR",
+                    help="the command that made --reproduce's directory, quoted on the page")
+    ap.add_argument("--reproduce-timing", metavar="FILE.json", help="its --timing file (time and runs on the page)")
     args = ap.parse_args(argv)
+    if args.reproduce:
+        path = OUT / "reproduce-summary.md"
+        timing = Path(args.reproduce_timing) if args.reproduce_timing else None
+        path.write_text(reproduce_page(Path(args.reproduce), args.reproduce_command, timing))
+        print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
     if args.benchmarks:
         path = OUT / "benchmarks.md"
         path.write_text(benchmarks_page(Path(args.benchmarks), args.benchmarks_command))
