@@ -27,7 +27,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "generated"
-HELP_WIDTH = "100"  # argparse wraps at $COLUMNS: fixed, so the pages do not depend on the terminal
+HELP_WIDTH = "80"  # argparse wraps at $COLUMNS: fixed, so the pages do not depend on the terminal
 
 sys.path.insert(0, str(ROOT))
 
