@@ -318,6 +318,20 @@ def reproduce_page(out_dir: Path, command: str, timing: Path | None) -> str:
             f" (`DIR/report.md`, its first table).{when}\n\n{body}\n")
 
 
+# --- the stability analysis (cheap, but its solver's last digits vary by machine: written, not checked) --
+
+def stability_page() -> str:
+    from gcs_tools.stability import analyse, load_settings
+    from rig_emulator.config.loader import load_config
+
+    md = analyse(load_config(airframe="hilms"), load_settings({})).to_markdown().strip()
+    lines = md.splitlines()
+    if lines and lines[0].startswith("## "):
+        lines = lines[1:]
+    return ("Written by `python scripts/docs_gen.py --stability`: the output of `rig-gcs stability` (the default "
+            "airframe, `hilms`; the FLC gains are the same on both plants).\n" + "\n".join(lines) + "\n")
+
+
 # --- all -----------------------------------------------------------------------------------------
 
 def pages() -> dict[str, str]:
@@ -341,7 +355,14 @@ def main(argv=None) -> int:
     ap.add_argument("--reproduce-command", default="rig-gcs reproduce -o DIR",
                     help="the command that made --reproduce's directory, quoted on the page")
     ap.add_argument("--reproduce-timing", metavar="FILE.json", help="its --timing file (time and runs on the page)")
+    ap.add_argument("--stability", action="store_true",
+                    help="also write docs/generated/stability.md (rig-gcs stability; needs the analysis extra)")
     args = ap.parse_args(argv)
+    if args.stability:
+        path = OUT / "stability.md"
+        path.write_text(stability_page())
+        print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
     if args.reproduce:
         path = OUT / "reproduce-summary.md"
         timing = Path(args.reproduce_timing) if args.reproduce_timing else None
