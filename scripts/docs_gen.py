@@ -295,6 +295,9 @@ def benchmarks_page(results_path: Path, command: str) -> str:
 
 # --- the reproduction's summary (expensive: written from a `rig-gcs reproduce` output) --------------
 
+MACHINE_NOTE = ""
+
+
 def reproduce_page(out_dir: Path, command: str, timing: Path | None) -> str:
     import json
 
@@ -312,7 +315,7 @@ def reproduce_page(out_dir: Path, command: str, timing: Path | None) -> str:
         parts = [f"{runs} headless runs" if runs is not None else "",
                  f"{t['wall_s']:.1f} s wall" if "wall_s" in t else "",
                  f"{t['cpu_s']:.1f} s CPU" if "cpu_s" in t else ""]
-        machine = t.get("machine") or ""
+        machine = MACHINE_NOTE
         when = (" It took " + ", ".join(p for p in parts if p) + (f" on {machine}" if machine else "") + ".")
     return (f"Written by `python scripts/docs_gen.py --reproduce DIR` from the report of `{command}`"
             f" (`DIR/report.md`, its first table).{when}\n\n{body}\n")
@@ -355,6 +358,7 @@ def main(argv=None) -> int:
     ap.add_argument("--reproduce-command", default="rig-gcs reproduce -o DIR",
                     help="the command that made --reproduce's directory, quoted on the page")
     ap.add_argument("--reproduce-timing", metavar="FILE.json", help="its --timing file (time and runs on the page)")
+    ap.add_argument("--machine", default="", help="the machine the expensive run was made on, in words, for the page")
     ap.add_argument("--stability", action="store_true",
                     help="also write docs/generated/stability.md (rig-gcs stability; needs the analysis extra)")
     args = ap.parse_args(argv)
@@ -364,6 +368,8 @@ def main(argv=None) -> int:
         print(f"docs_gen: wrote {path.relative_to(ROOT)}")
         return 0
     if args.reproduce:
+        global MACHINE_NOTE
+        MACHINE_NOTE = args.machine
         path = OUT / "reproduce-summary.md"
         timing = Path(args.reproduce_timing) if args.reproduce_timing else None
         path.write_text(reproduce_page(Path(args.reproduce), args.reproduce_command, timing))
