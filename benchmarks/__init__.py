@@ -8,5 +8,5 @@ Run from the repository root::
 
 Every figure is a ratio against a reference measured in the same run on the same
 machine (or a raw figure with its unit), the median over ``--repeat`` fresh
-subprocesses. See ``benchmarks/README.md`` and :mod:`benchmarks.harness`.
+subprocesses. See ``docs/explanation/performance.md`` and :mod:`benchmarks.harness`.
 """

@@ -1,4 +1,4 @@
-"""Our complementary filter against ``ahrs.filters.Complementary`` (issue 8 item 4).
+"""Our complementary filter against ``ahrs.filters.Complementary``.
 
 Both filters get the same 100,000 IMU samples (1 kHz, 100 s) of a smooth dynamic attitude
 trajectory (roll / pitch / yaw sinusoids of 25 / 20 / 40 deg, 0.8 rad/s, heading offset
@@ -204,7 +204,7 @@ def cf_ahrs(n: int, seed: int) -> dict:
 
 @benchmark("cf-vs-ahrs", probes=(OURS_PROBE, AHRS_PROBE))
 def cf_vs_ahrs(stats: dict[str, ProbeStats]) -> list[Metric]:
-    """Our complementary filter vs ahrs' on the same 100k samples (issue 8 item 4)."""
+    """Our complementary filter vs ahrs' on the same 100k samples."""
     ours, theirs = stats[OURS_PROBE], stats[AHRS_PROBE]
     out = [
         ours.metric("us_per_sample", "ours per sample, compiled loop", "us"),

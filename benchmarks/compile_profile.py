@@ -1,4 +1,4 @@
-"""Where numba's cold compile of the step loop spends its time (issue 14).
+"""Where numba's cold compile of the step loop spends its time.
 
 ``python -m benchmarks.compile_profile [--scenario hover] [--top 25] [--json FILE]`` runs one
 headless ``simulate`` (0.1 s) in **this** process with an empty numba cache (a fresh
@@ -19,7 +19,7 @@ compiler pass). It prints:
 into numba's typing, its other passes, its lowering to LLVM IR (Python), and LLVM's parsing,
 function-level optimisation, module-level optimisation (after the callees are linked in) and
 machine-code generation, by timing numba's own codegen methods (``CPUCodeLibrary``); see the
-"Cold compile" section of benchmarks/README.md.
+"Cold compile" section of docs/explanation/performance.md.
 
 Nothing here asserts; the figures are noisy on a shared machine: compare runs made back to
 back and quote CPU time next to wall time.

@@ -1,4 +1,4 @@
-"""Our compiled FLC against scikit-fuzzy 0.5.0's ``ControlSystemSimulation`` (issue 8 item 3).
+"""Our compiled FLC against scikit-fuzzy 0.5.0's ``ControlSystemSimulation``.
 
 Both sides evaluate the same axis: ``make_axis(radians(1.8), radians(7.0), 0.05)`` (paper
 geometry), the 49 rules of Table 1 (``RULE_TABLE``) and the membership geometry of our
@@ -223,7 +223,7 @@ def flc_compute(n: int, n_python: int, batches: int) -> dict:
 
 @benchmark("flc-vs-skfuzzy", probes=(SKFUZZY_PROBE, FLC_PROBE))
 def flc_vs_skfuzzy(stats: dict[str, ProbeStats]) -> list[Metric]:
-    """Our compiled FLC vs scikit-fuzzy 0.5.0 on the same rules and geometry (issue 8 item 3)."""
+    """Our compiled FLC vs scikit-fuzzy 0.5.0 on the same rules and geometry."""
     sk, ours = stats[SKFUZZY_PROBE], stats[FLC_PROBE]
     n = int(ours.first("n"))
     target = (Target(">=", 1000.0, "issue 8"),)

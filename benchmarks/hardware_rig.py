@@ -1,4 +1,4 @@
-"""hardware-rig: the hardware-faithful rig ``hilms`` against the ideal plant ``hilms-ideal`` (issue 13).
+"""hardware-rig: the hardware-faithful rig ``hilms`` against the ideal plant ``hilms-ideal``.
 
 Both fly the helix with the built-in ``smc-flc`` strategy, the full sensing chain and 1 kHz
 physics, in fresh processes with a warm numba cache for the steady state (the probes
@@ -6,7 +6,7 @@ physics, in fresh processes with a warm numba cache for the steady state (the pr
 ``python -m benchmarks --only rig-core,hardware-rig`` runs them once). Figures:
 
 * each plant's real-time factor (``SimResult.sim_time_s / wall_time_s``, median of the in-process
-  calls after the first, then over repetitions); issue 13's target: the full-fidelity ``hilms``
+  calls after the first, then over repetitions); the target: the full-fidelity ``hilms``
   rig at least 500x real time on a quiet 2-core machine;
 * **speed of hilms / speed of hilms-ideal**, paired by repetition (the two probes run back to
   back): the hardware effects' cost, the figure that carries over from a busy machine (the

@@ -1,4 +1,4 @@
-"""jitter: wall-clock regularity of the served rig's control loop at speed-up 1 (issue 8).
+"""jitter: wall-clock regularity of the served rig's control loop at speed-up 1.
 
 What is measured. The served rig advances its physics and controllers in chunks of 5 ms of
 simulated time, each paced against the wall clock (see
@@ -9,7 +9,7 @@ control loop's wall-clock period is the spacing of consecutive chunk starts, nom
 5 ms. The rig records every chunk (``--timing-log``); the probe reports, over the window a
 ground station was attached:
 
-* **period error** ``|start[k] - start[k-1] - 5 ms|`` p50 / p99 / max (issue 8: p99 < 1 ms);
+* **period error** ``|start[k] - start[k-1] - 5 ms|`` p50 / p99 / max (target: p99 < 1 ms);
 * **lateness** ``start - due`` against the pacing schedule, p50 / p99 / max, and the fraction
   of chunks more than 1 ms late;
 * **busy time** per chunk (step + telemetry + socket writes), p50 / p99 / max;

@@ -1,4 +1,4 @@
-"""many-rigs: sweeps of N = 10, 100, 1000 independent rigs over all cores (issue 8 item 2).
+"""many-rigs: sweeps of N = 10, 100, 1000 independent rigs over all cores.
 
 The rigs. Every rig is the full-fidelity rig of ``rig-core`` (1 kHz physics, five IMU
 modules, four load cells, estimators, smc-flc) flying the harmonic attitude reference of

@@ -1,4 +1,4 @@
-"""mavlink-link: the rig's MAVLink link at speed-up 1 over loopback (issue 8 item 5).
+"""mavlink-link: the rig's MAVLink link at speed-up 1 over loopback.
 
 Probe ``link-rig`` starts ``rig-emulator serve --speedup 1`` (a fresh process, numba cache
 warm, chunk timing log on) and drives it from a pymavlink client in the probe process,
@@ -19,7 +19,7 @@ which sends a GCS HEARTBEAT at 1 Hz and reads everything the rig sends:
    conditions of the reference;
 6. a second rig at ``--speedup max`` with the same client attached (default streams) for
    ``max_s`` seconds: its real-time factor over the link (simulated s per wall s from its
-   chunk record), the figure ``scripts/measure_link.py`` used to print.
+   chunk record), the figure ``python -m benchmarks --only mavlink-link,jitter`` used to print.
 
 Probe ``link-reference`` measures 2 and 3 against :mod:`benchmarks.mavlink_responder`, a
 minimal pymavlink vehicle that only answers (no simulation, no streams), with the same

@@ -1,4 +1,4 @@
-"""memory: resident memory of the rig (issue 8 item 6), read from /proc (VmRSS, VmHWM).
+"""memory: resident memory of the rig, read from /proc (VmRSS, VmHWM).
 
 Probes (each a fresh process; the numba cache is warm, so no process here compiles):
 

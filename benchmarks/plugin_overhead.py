@@ -20,14 +20,14 @@ repetitions. Wall-clock figures on a loaded machine are noisy: quote them with t
 
 **Which plant.** Both trees fly the same plant: ``--airframe ideal`` (the default) is the ideal
 plant in each tree (``hilms-ideal`` where the tree has it, else ``hilms``, which was the ideal
-plant before issue 13), so an A/B across the issue-13 commits does not compare the hardware
+plant), so an A/B across the commits that added the hardware rig does not compare the hardware
 rig with the ideal one. ``--airframe hilms`` (repeatable) names an airframe both trees have.
 
-**Which commits.** The plug-in machinery alone (issue 16) is ``--base 3f19de9 --this a324065``
-(the h16-plugin branch from its first commit to its last before it merged main); ``HEAD``
+**Which commits.** The plug-in machinery alone is ``--base 3f19de9 --this a324065``
+(the plug-in machinery from its first commit to its last before it was merged); ``HEAD``
 against 3f19de9 also carries everything merged since (the hardware plant, the link work). The
 same A/B measures a speed change of the step loop: ``--base f83dea3 --airframe hilms
---airframe ideal --strategies smc-flc`` (issue 13's hardware rig before and after s5-speed).
+--airframe ideal --strategies smc-flc`` (the hardware rig, before and after a change).
 """
 
 from __future__ import annotations

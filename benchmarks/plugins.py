@@ -1,4 +1,4 @@
-"""plugins: controller plug-ins in both call paths against the built-in strategy (issue 16).
+"""plugins: controller plug-ins in both call paths against the built-in strategy.
 
 Probes (each in a fresh process; ``rig_emulator.api.simulate("helix", strategy="pid", ...)``
 with the full sensing chain, 1 kHz physics, 500 Hz control):

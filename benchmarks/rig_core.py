@@ -1,10 +1,10 @@
 """rig-core: one rig, 1 kHz physics, full controller, against RotorPy in the same run.
 
 Each scenario is measured twice: the **core** (``sensors.simulate = false``: physics,
-guidance and controllers on the true state, the figure of issue 2) and the **full-fidelity
+guidance and controllers on the true state, the core's own figure) and the **full-fidelity
 rig** (the default: five IMU modules with magnetometers, four load cells, calibration,
-ensemble, complementary filter, load-cell filter, onboard Eq. 1, the figure of issues 3 and
-8). Their ratio is the sensing chain's cost (issue 3: within 2x).
+ensemble, complementary filter, load-cell filter, onboard Eq. 1, the figure users
+see). Their ratio is the sensing chain's cost (target: within 2x).
 
 The probe calls ``rig_emulator.api.simulate(scenario, strategy, duration, seed)`` in a
 fresh process:
@@ -17,7 +17,7 @@ fresh process:
    over the time spent in the compiled loop (the API excludes compilation). The
    end-to-end factor, timed around the whole call, is reported as well.
 
-Targets (issue 2, issue 8): >= 200x real time, later >= 300x real time and >= 400x
+Targets: >= 200x real time for the core, >= 300x real time and >= 400x
 RotorPy's bare 1 kHz loop with its IMU (``rotorpy-1khz-imu``).
 """
 
@@ -97,7 +97,7 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
     source = _source_label() if _simulate is None else "stand-in"
 
     kwargs = {} if sensors else {"overrides": {"sensors.simulate": False}}
-    if airframe is not None:  # None: the API's default plant (the hardware rig, issue 13)
+    if airframe is not None:  # None: the API's default plant (the hardware rig)
         kwargs["airframe"] = airframe
     t1 = time.perf_counter()
     first = simulate(scenario, strategy=strategy, duration=duration, seed=seed, **kwargs)
@@ -136,7 +136,7 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
 
 
 VARIANTS = {"core": False, "full": True, "ideal": True}  # name -> sensors simulated
-#: name -> airframe: the default plant (the hardware rig ``hilms``, issue 13) or the ideal plant
+#: name -> airframe: the default plant (the hardware rig ``hilms``) or the ideal plant
 VARIANT_AIRFRAME = {"core": None, "full": None, "ideal": "hilms-ideal"}
 CORE_TARGETS = (Target(">=", 200.0, "issue 2"),)
 FULL_TARGETS = (Target(">=", 300.0, "issue 8"), Target(">=", 500.0, "issue 13"))

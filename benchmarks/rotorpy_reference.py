@@ -34,7 +34,7 @@ from .harness import BenchmarkUnavailable, Metric, ProbeStats, benchmark, paired
 ROTORPY_BARE = "rotorpy-1khz-imu"
 ROTORPY_SIMULATE = "rotorpy-simulate-1khz"
 
-# The figure recorded in the project's performance notes (2026-11-22), for comparison only.
+# The figure recorded in the project's performance notes, for comparison only.
 NOTED_RTF = 0.64
 
 

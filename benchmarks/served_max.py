@@ -1,4 +1,4 @@
-"""served-max: a served rig running as fast as it can with one ground station (issue 14).
+"""served-max: a served rig running as fast as it can with one ground station.
 
 Probe ``served-max-rig`` starts ``rig-emulator serve --speedup max`` (fresh process, numba
 cache warm, chunk timing log on, the link tests' plant ``hilms-ideal``) with one ground
@@ -11,7 +11,7 @@ station attached at the default stream rates, for ``duration_s`` wall seconds pe
 * **TCP** (``tcpin``), a pymavlink ``mavutil`` client reading everything.
 
 The figure is the **real-time factor**: simulated seconds per wall second from the rig's
-chunk record over the client's window (target: >= 100x, issue 14; 33.7x before the frames
+chunk record over the client's window (target: >= 100x; 33.7x before the frames
 were packed and the link serviced per tick).
 
 Reference (``served-max-core``): the same plant in a fresh process, a ``LiveRig`` stepped in

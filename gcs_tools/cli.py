@@ -17,7 +17,7 @@ Commands (``rig-gcs COMMAND --help`` for each):
 * ``stability [--json]`` - stability analysis of the FLC gains (Eq. 16-32): fitted planes, the LMI
   of Eq. 32, the bound R2 of Eq. 31 (exit 1 when the LMI is infeasible; needs the ``analysis`` extra).
 * ``reproduce -o DIR`` - the paper's experiments, our figures and numbers next to the paper's, a
-  verdict on each claim (:mod:`gcs_tools.reproduce`, docs/REPRODUCTION.md).
+  verdict on each claim (:mod:`gcs_tools.reproduce`, docs/explanation/readings.md).
 * ``identify --params KEY=LO:HI,... --paper | --tlog run.tlog --scenario NAME -o fit.toml`` - fit
   parameters of the emulated rig to the paper's numbers or to flight logs, written as a preset
   (:mod:`gcs_tools.identify`, docs/IDENTIFY.md).
@@ -408,11 +408,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     from gcs_tools.reproduce.cli import add_parser as add_reproduce_parser
 
-    add_reproduce_parser(sub)  # rig-gcs reproduce -o DIR (issue 7)
+    add_reproduce_parser(sub)  # rig-gcs reproduce -o DIR
 
     from gcs_tools.identify.cli import add_parser as add_identify_parser
 
-    add_identify_parser(sub)  # rig-gcs identify (issue 13)
+    add_identify_parser(sub)  # rig-gcs identify
     return parser
 
 

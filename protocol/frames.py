@@ -1,6 +1,6 @@
 """Frame conversions between the rig's world (paper) frame and MAVLink's NED/FRD frames.
 
-Implements docs/CONVENTIONS.md "Frames":
+Implements docs/explanation/conventions.md "Frames":
 
 * World W is ENU (X east, Y north, Z up); MAVLink's local frame is NED. The two differ by
   the permutation ``T_NED_ENU`` (x_N = y_E, y_N = x_E, z_N = -z_E), which is its own inverse.
@@ -96,7 +96,7 @@ def rwb_from_paper_euler(phi: float, theta: float, psi: float) -> np.ndarray:
 
 
 def paper_euler_from_rwb(r_wb) -> tuple[float, float, float]:
-    """(phi, theta, psi): Z-Y-X angles of Q = R_WB diag(1, -1, -1) (CONVENTIONS.md)."""
+    """(phi, theta, psi): Z-Y-X angles of Q = R_WB diag(1, -1, -1) (docs/explanation/conventions.md)."""
     return _zyx_angles(np.asarray(r_wb, dtype=float) @ D_FLU_FRD)
 
 
@@ -238,7 +238,7 @@ def mavlink_quaternion_from_quat_wb(q_wb) -> tuple[float, float, float, float]:
     return w / n, x / n, y / n, z / n
 
 
-# --- scalar forms for the served rig's per-chunk messages (issue 14) -----------------------------
+# --- scalar forms for the served rig's per-chunk messages -----------------------------
 # The functions below give, bit for bit, what the array functions above give for one attitude,
 # in plain float arithmetic: a 3x3 matrix is a 9-tuple (row-major). numpy's small-array calls
 # cost microseconds each; a served rig builds these messages hundreds of times per simulated

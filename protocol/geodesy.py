@@ -97,7 +97,7 @@ def ecef_to_geodetic_xyz(x: float, y: float, z: float) -> tuple[float, float, fl
     """:func:`ecef_to_geodetic` of one ECEF point given as three floats, in scalar math: the
     same operations in the same order, bit-identical where numpy's ``arctan2`` is libm's (hosts
     without AVX-512; with it numpy runs its own SIMD kernel and the two differ by an ulp or two,
-    docs/CONVENTIONS.md; the horizontal distance stays numpy's ``hypot``, which Python's
+    docs/explanation/conventions.md; the horizontal distance stays numpy's ``hypot``, which Python's
     ``math.hypot`` does not always match to the last bit; a test compares the two), about
     15x faster than numpy on 0-d arrays (the served rig converts positions for several
     messages a simulated second)."""

@@ -34,7 +34,7 @@ tell the two apart).
 An ``nrt=False`` function is also compiled without numba's CPython wrapper (it is called
 from compiled code; a call from Python runs a twin compiled with one), and no function gets
 numba's C-callable wrapper: compiling wrappers nothing calls was a tenth of the cold compile
-(issue 14, benchmarks/README.md "Cold compile").
+(docs/explanation/performance.md "Cold compile").
 
 Set ``HILMS_NUMBA_CACHE`` to choose the cache root (default ``~/.cache/hilms-sil``).
 """
@@ -114,7 +114,7 @@ def _in_large_frame(fn, args, kwargs):
 # grows into one and unmapped as soon as it returns out of it. numba's compiler recurses deeply and
 # its depth swings across such boundaries all the time: in a cold compile of the step loop that was
 # about 0.55 million page faults (84 % of all, in _PyThreadState_BumpFramePointerSlow; perf) and
-# about 5 s of system time (benchmarks/README.md, "Cold compile"). A compile therefore starts in a
+# about 5 s of system time (docs/explanation/performance.md, "Cold compile"). A compile therefore starts in a
 # frame whose (never touched) stack reservation makes CPython give it a 2 MiB chunk; the compiler's
 # frames then live in the rest of that chunk, which stays mapped until the compile returns.
 _in_large_frame.__code__ = _in_large_frame.__code__.replace(
@@ -180,7 +180,7 @@ def jit(*args, nrt=True, python=None, **kwargs):
     ``python``: compile numba's CPython wrapper (the code that unboxes every argument when
     Python calls the function). Default: only with ``nrt=True``; an ``nrt=False`` function is
     part of the step loop, called from compiled code only, and compiling a wrapper for its
-    namedtuples of arrays that nothing calls cost about a tenth of the cold compile (issue 14).
+    namedtuples of arrays that nothing calls cost about a tenth of the cold compile.
     Called from Python anyway (a test), it runs a twin compiled with the wrapper. No function
     gets numba's C-callable (cfunc) wrapper: nothing takes a jitted function's address.
     """

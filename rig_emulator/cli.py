@@ -221,7 +221,7 @@ def _print_summary(args, cfg, result, errors: dict, reached, failsafe) -> None:
               f"on the same runs: rig-gcs reproduce -o DIR --controller {plugin} (docs/how-to/compare-controllers.md)")
     if fs is not None:
         what = "motors stopped, disarmed" if fs["action"] == "disarm" else "reported only"
-        print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/FAULTS.md)")
+        print(f"loss of control at t = {fs['t_s']:.2f} s ({fs['cause']}): {what} (docs/how-to/faults.md)")
     if cfg["guidance.type"] == "waypoints":
         done = int(np.isfinite(reached).sum())
         times = ", ".join("-" if not np.isfinite(t) else f"{t:.2f}" for t in reached)

@@ -1,7 +1,7 @@
 """A second process compiling part of the step loop's call tree while this one compiles the rest.
 
 numba compiles under one global lock, so a cold compile of the step loop keeps one core busy
-(issue 14, benchmarks/README.md "Cold compile"). But numba's on-disk cache
+(docs/explanation/performance.md "Cold compile"). But numba's on-disk cache
 (:mod:`rig_emulator._jit`) is shared between processes, and when numba types a call from
 the loop it first looks for the callee's signature in that cache: a callee compiled by
 another process is loaded (and its code linked into the loop's module, as for one compiled

@@ -17,7 +17,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 #: cold compile of the step loop on a quiet 2-core machine, a helper process on the second core
-#: (rig_emulator/compile_helper.py; measured 21-23 s, benchmarks/README.md "Cold compile")
+#: (rig_emulator/compile_helper.py; measured 21-23 s, docs/explanation/performance.md "Cold compile")
 QUIET_COMPILE_S = 25
 
 

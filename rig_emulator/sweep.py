@@ -40,7 +40,7 @@ computed where the job ran (``f`` must be picklable: a module-level function), s
 what it returns crosses the process or network boundary.
 
 Determinism: a job's result depends on the job only (the seed seeds every random stream,
-see docs/CONVENTIONS.md), not on the executor, the worker or the order of completion. Runs
+see docs/explanation/conventions.md), not on the executor, the worker or the order of completion. Runs
 on one machine (one numba build) are bit-identical serial, in local processes or on a
 local Dask cluster; machines with other CPUs may differ in the last bits (numba compiles
 for the host CPU). :meth:`JobResult.digest` fingerprints a result for such comparisons;

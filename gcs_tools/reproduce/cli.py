@@ -25,7 +25,7 @@ def add_parser(sub) -> None:
                     "frequency sweep, extra masses, line-then-helix, the 250 s altitude run, and the waypoint "
                     "rectangle flown over MAVLink), then writes DIR/report.md (our numbers next to the paper's and "
                     "a verdict on each of its claims), DIR/results.json and PNG figures. The same seed gives the "
-                    "same files byte for byte. See docs/REPRODUCTION.md.")
+                    "same files byte for byte. See docs/how-to/reproduce.md.")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for report.md, results.json and figures")
     p.add_argument("--seed", type=_seed, default=0, help="first seed of every plant's runs: %(default)s")
     p.add_argument("--seeds", type=_workers, default=3, help="seeds per plant (SEED, SEED+1, ...): %(default)s")

@@ -6,7 +6,7 @@ the mass overridden. A run whose true roll or pitch leaves +-45 deg has diverged
 its mean errors and chattering are computed up to that time only (not at all when it
 diverges within the first second). Chattering, as Fig. 15 shows it (the controllers' response):
 RMS of the roll and pitch errors above 5 Hz (:func:`~gcs_tools.reproduce.metrics.tilt_chattering_deg`),
-which the verdict reads; next to it the motor voltage commands' (the verdict's figure until 2026-11-28).
+which the verdict reads; next to it the motor voltage commands'.
 """
 
 from __future__ import annotations

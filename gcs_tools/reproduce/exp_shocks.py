@@ -7,7 +7,7 @@ sees minus the reference): the axis it disturbed, the peak deviation, the oversh
 zero, and the settling time. Chattering, as Fig. 12 shows it (it plots the angles): RMS of the
 roll and pitch errors above 5 Hz (:func:`~gcs_tools.reproduce.metrics.tilt_chattering_deg`),
 which the verdict reads; next to it the RMS of the motor voltage commands above 5 Hz
-(:func:`~gcs_tools.reproduce.metrics.hf_rms`; the verdict read this until 2026-11-28).
+(:func:`~gcs_tools.reproduce.metrics.hf_rms`).
 
 Settling (:func:`~gcs_tools.reproduce.metrics.settling_about_final`) is the textbook one: the
 time after which the response stays within 10 % of its deviation (at least 0.1 deg) about its

@@ -36,7 +36,7 @@ def status_letter(status: str) -> str:
 class Context:
     """What every experiment's runs share: the seed, the plant (an airframe preset: ``hilms``
     the hardware rig, ``hilms-ideal`` the ideal plant) and parameter overrides on top of it
-    (a reading of the readings table, docs/REPRODUCTION.md), as (key, value) pairs."""
+    (a reading of the readings table, docs/how-to/reproduce.md), as (key, value) pairs."""
 
     seed: int
     quick: bool

@@ -1,7 +1,7 @@
-"""The reproduction on several plants and seeds side by side (issue 13, section 5).
+"""The reproduction on several plants and seeds side by side (section 5).
 
 ``rig-gcs reproduce`` runs every experiment on the hardware rig (``hilms``) and the ideal
-plant (``hilms-ideal``), each over three seeds; the readings table (scripts/readings_table.py)
+plant (``hilms-ideal``), each over three seeds; the readings table (python -m gcs_tools.studies readings)
 runs them on one plant under several readings of the paper. This module turns the sections
 of each (plant, seed) run into
 

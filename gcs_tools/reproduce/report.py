@@ -104,7 +104,7 @@ def render(sections: list[Section], stability_md: str | None, seed: int, quick: 
               f"`rig-gcs reproduce -o DIR {opts}` writes the same `report.md`, "
               "`results.json` and figures byte for byte on the same installation (add `--workers N` or "
               "`--scheduler tcp://HOST:PORT` to spread the runs; the results do not depend on where they ran). "
-              "What each experiment runs and measures: docs/REPRODUCTION.md.", ""]
+              "What each experiment runs and measures: docs/how-to/reproduce.md.", ""]
     return "\n".join(lines)
 
 

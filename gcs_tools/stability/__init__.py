@@ -2,7 +2,7 @@
 
 ``analyse(config=None) -> StabilityResult``; ``result.to_markdown()`` is a report section,
 ``result.to_dict()`` its JSON form. Needs the optional extra ``analysis`` (cvxpy, clarabel);
-without it :class:`AnalysisUnavailable` says how to install it. See docs/STABILITY.md.
+without it :class:`AnalysisUnavailable` says how to install it. See docs/explanation/stability.md.
 
 The names below are imported on first use (PEP 562): ``rig-gcs --help`` and the other
 commands import ``gcs_tools.stability.command`` for its arguments without loading numba,

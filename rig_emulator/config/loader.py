@@ -2,7 +2,7 @@
 
 Layers, later ones winning: ``presets/rig.toml`` (every default), the hardware preset an
 airframe selects (``presets/hardware/<name>.toml``: the real rig's effects and readings,
-issue 13; ``hilms`` selects one, ``hilms-ideal`` none), an airframe preset
+``hilms`` selects one, ``hilms-ideal`` none), an airframe preset
 (``presets/airframes/<name>.toml``, Table 2), a scenario preset
 (``presets/scenarios/<name>.toml``), user TOML files, then dotted-key overrides such as
 ``{"smc.switching": "boundary"}``. Every leaf is checked against
@@ -74,7 +74,7 @@ def _airframe_layers(airframe: str, seen: tuple = ()) -> tuple[dict, list[str]]:
     Two keys of an airframe file are not parameters: ``based_on = "NAME"`` takes another
     airframe preset's values first (``hilms`` is ``hilms-ideal`` plus its hardware) and
     ``hardware = "NAME"`` layers ``presets/hardware/NAME.toml`` (any parameter tables: the
-    real rig's effects and readings, issue 13) over ``rig.toml``.
+    real rig's effects and readings) over ``rig.toml``.
     """
     if airframe in seen:
         raise ConfigError(f"airframe preset {airframe!r}: based_on forms a loop ({' -> '.join(seen + (airframe,))})")

@@ -132,7 +132,7 @@ SCHEMA: dict[str, Spec] = {
     "motors.thrust_ceiling_grf": F("thrust ceiling per motor (Sec. 3-2)", "gr.F", 0.0, 1e5, lo_open=True),
     "motors.time_constant": F("first-order lag from voltage command to thrust", "s", 0.0, 10.0),
     "motors.kf": F("rotor thrust coefficient kF, F = kF Omega^2 (Eq. 38)", "N s^2/rad^2", 0.0, 1.0, lo_open=True),
-    # hardware effects of the motor chain (issue 13, physics/hardware.py; neutral values = the ideal plant)
+    # hardware effects of the motor chain (physics/hardware.py; neutral values = the ideal plant)
     "motors.thrust_gain": FS("true thrust / Eq. 40 thrust per motor 1..4 (motor and propeller mismatch times "
                              "the common thrust-chain gain); 1 = Eq. 40", "", 0.5, 1.5, 4),
     "motors.thrust_bias_grf": F("common additive thrust bias of every running motor (0 = none)", "gr.F", -200.0, 200.0),
@@ -169,7 +169,7 @@ SCHEMA: dict[str, Spec] = {
     "control.allocation_priority": S("what gives way when the A6 inverse leaves a motor outside [0, its ceiling]: "
                                      "'attitude' roll/pitch kept, the collective u1 shifted to fit (ideal plant); "
                                      "'thrust' u1 kept, the roll/pitch differential scaled down (Sec. 3-3 computes u1 "
-                                     "first; docs/REPRODUCTION.md, \"Table 6's altitude\"); 'clip' no priority, each motor clipped "
+                                     "first; docs/explanation/readings.md); 'clip' no priority, each motor clipped "
                                      "to [0, its ceiling] on its own (a plain firmware: Sec. 3-3's A6 and Eq. 40 "
                                      "inverses, the supply capping each motor)", ("attitude", "thrust", "clip")),
     "control.actuation_delay": F("sensing-to-actuation delay: computation, PWM frame, ESC update; rounded to whole "
@@ -181,7 +181,7 @@ SCHEMA: dict[str, Spec] = {
     "controller_model.thrust_per_volt_scale": F("the Eq. 40 slope the controllers invert / the true one (1 = exact)",
                                                 "", 0.1, 10.0),
     "smc.gain_reading": S("unit of Eq. 41's K: 'si' rad/s^2 (K as printed), 'thrust' a thrust difference in N "
-                          "(switching torque K l, yaw K kM/kF), 'torque' a torque in N m (docs/REPRODUCTION.md)",
+                          "(switching torque K l, yaw K kM/kF), 'torque' a torque in N m (docs/explanation/readings.md)",
                           ("si", "thrust", "torque")),
     "smc.lambda_reading": S("unit of Eq. 41's lambda: 'si' 1/s, 'deg' applied to angles in degrees against rates "
                             "in rad/s (lambda 180/pi in SI), 'time-constant' seconds (1/lambda in SI)",
@@ -296,7 +296,7 @@ SCHEMA: dict[str, Spec] = {
     "sensor_models.estimation": Spec("tree", "overrides of presets/sensors/estimation.toml (calibration procedure, guards, Kalman)"),
     "faults.events": Spec(
         "table_list",
-        "device faults switched on at a time (docs/FAULTS.md): IMU modules, load cells, motors",
+        "device faults switched on at a time (docs/how-to/faults.md): IMU modules, load cells, motors",
         item={
             "t": F("when the fault starts", "s", 0.0),
             "sensor": S("which kind of device", ("imu", "load_cell", "motor")),
@@ -344,7 +344,7 @@ SCHEMA: dict[str, Spec] = {
                                    "of first-order coloured noise (0 = none)", "N m", 0.0, 10.0),
     "disturbance.torque_noise_corner_hz": F("corner frequency of the random body torque", "Hz", 0.0, 500.0,
                                             lo_open=True),
-    # --- the spherical joint and the frame (issue 13) ----------------------------------------------
+    # --- the spherical joint and the frame ----------------------------------------------
     "joint.viscous": V3("viscous friction of the spherical joint per body axis", "N m s/rad", 0.0, 10.0),
     "joint.coulomb": V3("Coulomb friction of the spherical joint per body axis", "N m", 0.0, 10.0),
     "joint.coulomb_smoothing": F("body rate over which the Coulomb friction is smoothed (tanh(w / this))", "rad/s",

@@ -3,14 +3,14 @@
 A6: ``u1 = F1 + F2 + F3 + F4``, ``u2 = l (F4 - F2)``, ``u3 = l (F1 - F3)``,
 ``u4 = c (F1 - F2 + F3 - F4)`` with ``c = kM / kF``; (u2, u3, u4) are torques about the
 body axes of B (FRD). The controllers produce torques about the axes of the Euler frame
-(``Q = R_WB diag(1,-1,-1)``, docs/CONVENTIONS.md); :func:`euler_torque_to_body` is the one
+(``Q = R_WB diag(1,-1,-1)``, docs/explanation/conventions.md); :func:`euler_torque_to_body` is the one
 place that converts them.
 
 When the exact inverse keeps every motor in ``[0, f_max]`` it is used as is. Otherwise one of
 three readings (``control.allocation_priority``, passed as ``priority``: PRIORITY_*) decides what
 gives way; in the first two yaw gets what is left:
 
-* ``"attitude"`` (PRIORITY_ATTITUDE; the ideal plant, the emulator before issue 13's
+* ``"attitude"`` (PRIORITY_ATTITUDE; the ideal plant, the emulator's
   table6 study): roll/pitch first (scaled down only if their differential alone exceeds the
   range), then the collective is shifted to fit. Around hover the motors have more room below
   (down to 0) than above (up to ``f_max``), so a saturated roll/pitch command lowers u1.
@@ -18,13 +18,13 @@ gives way; in the first two yaw gets what is left:
   u1 in its first step (the altitude law, third row of Eq. 33) and the attitude inputs u2, u3
   last: the collective u1 is kept (clamped to ``[0, 4 f_max]``) and the roll/pitch
   differential is scaled down, direction kept, until every motor fits around it
-  (:func:`thrust_first_scale`). docs/REPRODUCTION.md, "Table 6's altitude".
+  (:func:`thrust_first_scale`). docs/explanation/readings.md, "Table 6's altitude".
 * ``"clip"`` (PRIORITY_CLIP): no priority at all. Sec. 3-3's firmware computes u1..u4, the four
   motor thrusts through the A6 inverse and each motor's voltage through Eq. 40's inverse; the
   supply (15 V, Fig. 11) caps each motor on its own, so each thrust is clipped to ``[0, f_max]``
   independently. Only the overflow is lost: a saturated pitch command loses part of its torque
   AND part of the collective, and yaw whatever the clipped motors carried. Measured on ``hilms``
-  (docs/REPRODUCTION.md, "Table 6's altitude", the third reading): Table 3's FLC yaw output then
+  (docs/explanation/readings.md, "Table 6's altitude", the third reading): Table 3's FLC yaw output then
   takes the motors and the FLC loses the helix, so it is available, not the default.
 """
 
@@ -46,7 +46,7 @@ def euler_torque_to_body(tx, ty, tz):
     return tx, -ty, -tz
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def allocate(u1, u2, u3, u4, arm_length, km_over_kf, f_max, priority, forces):
     """Motor thrusts ``forces[0:4]`` (N) realising (u1..u4) as closely as the limits allow;
     ``priority``: what gives way when saturating, a PRIORITY_* (module docstring).

@@ -83,7 +83,7 @@ def _axis_errors(ref, k, pos, vel):
     return e, de, (0.0 if math.isnan(a) else a)
 
 
-# a call from the step loop (inlining it there cost cold compile time, benchmarks/README.md,
+# a call from the step loop (inlining it there cost cold compile time, docs/explanation/performance.md,
 # hardware-rig); its stages are inlined into it: a call passed cp (ControlParams) and the other
 # arguments field by field at every control step. They are also inlined into the plug-in path
 # (control/plugin_step.py), so a rig with a plug-in types them once more (one without prunes it)
@@ -117,11 +117,11 @@ def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
         ez, dez, ffz = _axis_errors(ref, 2, pos, vel)
         weight = cp.mass * cp.g
         if cp.pos_law == FLC:
-            if cp.flc_rate_share != 1.0:  # issue 13: derivative on the measurement, partly or wholly
+            if cp.flc_rate_share != 1.0:  # derivative on the measurement, partly or wholly
                 # (dex + vel) is the desired velocity, 0 where an offboard set-point leaves it free (NaN).
                 # Only the derivative of a position error is taken partly on the measurement: an axis
                 # without a position reference (offboard velocity control) tracks v_des - v in full,
-                # else it would settle at share x v_des (s5-gcs, issue 15: 0.34 of a 0.5 m/s command)
+                # else it would settle at share x v_des (0.34 of a 0.5 m/s command)
                 if not math.isnan(ref[REF_POS]):
                     dex = cp.flc_rate_share * (dex + vel[0]) - vel[0]
                 if not math.isnan(ref[REF_POS + 1]):
@@ -196,7 +196,7 @@ def shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate):
         cstate[CS_FILTER + 0] = phi_d
         cstate[CS_FILTER + 2] = theta_d
         cstate[CS_FILTER + 4] = psi_d
-    # np.int64() / np.bool_(): literal constant arguments would compile one specialisation per value (issue 14)
+    # np.int64() / np.bool_(): literal constant arguments would compile one specialisation per value
     r0, dr0, a0 = reference_step(phi_d, cstate, np.int64(0), cp.ref_omega, dt, np.bool_(False))
     r1, dr1, a1 = reference_step(theta_d, cstate, np.int64(1), cp.ref_omega, dt, np.bool_(False))
     r2, dr2, a2 = reference_step(psi_d, cstate, np.int64(2), cp.ref_omega, dt, np.bool_(True))

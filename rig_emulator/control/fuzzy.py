@@ -212,7 +212,7 @@ def membership(x, terms, i):
     return 0.0
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def flc_eval(e, de, e_terms, de_terms, out_centers, rule_table):
     """FLC output for error ``e`` and error rate ``de`` (Sec. 3-2, Table 1, Eq. 14).
 
@@ -240,7 +240,7 @@ def flc_eval(e, de, e_terms, de_terms, out_centers, rule_table):
     return num / den
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def flc_axis(e, de, axis, rule_table):
     """:func:`flc_eval` with the geometry taken from a :class:`FuzzyAxis`."""
     return flc_eval(e, de, axis.e_terms, axis.de_terms, axis.out_centers, rule_table)

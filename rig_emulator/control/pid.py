@@ -9,7 +9,7 @@ Integrators are clamped to +-integral_limit (anti-windup).
 from rig_emulator._jit import jit
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def pid_axis(e, de, ff, kp, ki, kd, integ, idx, dt, limit):
     """One PID axis; ``integ[idx]`` holds the integral of e. Returns ff + kp e + ki int + kd de."""
     v = integ[idx] + e * dt

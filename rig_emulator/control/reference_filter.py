@@ -21,7 +21,7 @@ def wrap_angle(a):
     return a
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def reference_step(target, state, i, omega_n, dt, wrap):
     """Advance filter ``i`` (state[2i] = value, state[2i+1] = rate) towards ``target``.
 

@@ -41,7 +41,7 @@ def switch(s, boundary, phi):
     return 0.0
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def smc_attitude(e, de, acc_des, phi, theta, dphi, dtheta, wx, wy, wz, omega_r, cp, s_out, tau_out):
     """Eq. 9 for the three attitude axes.
 

@@ -1,4 +1,4 @@
-"""The rig firmware's supervisor (issue 9): sensor health, estimate validity, loss-of-control failsafe.
+"""The rig firmware's supervisor: sensor health, estimate validity, loss-of-control failsafe.
 
 It runs every ``div`` physics steps (``health.update_rate_hz``, 100 Hz by default, rounded to
 a whole number of control periods), after the controller, on what the firmware has: the
@@ -23,7 +23,7 @@ Sensor health (only with the sensor models on):
   site's field); it is reported *invalid* (``flags[F_INVALID]``) with the same averaging and
   hysteresis as the flags, since aggressive manoeuvres (~200 deg/s) make the modules
   disagree for moments. Several modules failing alike (e.g. three stuck) can outvote the
-  good ones without tripping either test: stated in docs/FAULTS.md.
+  good ones without tripping either test: stated in docs/how-to/faults.md.
 
 Loss of control (armed, ``fs_enabled``), each condition must hold without a break for
 ``hold_time`` to trip the failsafe:

@@ -1,4 +1,4 @@
-"""The firmware's load-cell thrust loop (issue 13, a reading of Sec. 3-3; off by default).
+"""The firmware's load-cell thrust loop (a reading of Sec. 3-3; off by default).
 
 Sec. 3-3: "using the output of the force sensors and Eq. 40, the input voltage of the motors
 and consequently the resulted PWM signal is computed". Read as an open-loop inverse of Eq. 40
@@ -40,7 +40,7 @@ def thrust_loop(dt, cp, cstate, cout, thrust_meas, cells_flagged, v_cmd):
     ``cp.thrust_loop_limit`` (``motors.thrust_loop_limit_grf``); the correction of a cell the
     supervisor flags (bit ``i`` of ``cells_flagged``: a dead cell, rejected by the guards) is
     frozen until it is healthy again; a motor commanded off stays off and its correction is held.
-    A stuck cell, which no guard can see (docs/FAULTS.md), drives its correction at most to the
+    A stuck cell, which no guard can see (docs/how-to/faults.md), drives its correction at most to the
     limit. The bound is the only anti-windup: freezing the integrator while a command is clipped
     at the supply would leave out the samples where the SMC's relay (Fig. 18) pushes a motor to
     the ceiling, whose error is one-signed, and leave a mean thrust error (measured: 0.5 N of

@@ -42,7 +42,7 @@ def make_attitude_chain(cal: ImuCalArrays, ens: EnsembleParams, cf: CfParams,
     return AttitudeChain(cal, ens, cf), work
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def attitude_estimation_step(sampled_mask, imu_raw, chain, work, att_out):
     """Calibrate, combine and filter the fresh IMU samples; returns the health mask."""
     if sampled_mask & SAMPLED_INERTIAL == 0:

@@ -86,7 +86,7 @@ def heading_from_mag(mx, my, mz, phi, theta, heading_ref):
     return wrap_pi(heading_ref - math.atan2(v1, hx))
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def complementary_step(gyro, accel, mag, mag_fresh, p, state, out):
     """One IMU sample of the filter; writes ``out = [phi, theta, psi, wx, wy, wz]``."""
     if state[6] == 0.0:

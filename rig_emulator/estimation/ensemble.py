@@ -82,7 +82,7 @@ def _median_axis(values, s, axis, scratch):
     return 0.5 * (scratch[h - 1] + scratch[h])
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def ensemble_vectors(values, s, mode, threshold, scratch, out):
     """Combine sensor ``s`` of every module ``values[m, s, :]`` into ``out`` (3,).
 
@@ -132,7 +132,7 @@ def ensemble_vectors(values, s, mode, threshold, scratch, out):
     return rejected
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def ensemble_step(values, sampled_mask, p, state, out):
     """Ensemble of gyro and accel (if ``SAMPLED_INERTIAL``) and mag (if ``SAMPLED_MAG``).
 
@@ -141,7 +141,7 @@ def ensemble_step(values, sampled_mask, p, state, out):
     the OR over sensors of the modules rejected at their latest sample.
     """
     thr = p.reject_threshold
-    # np.int64(): a literal constant argument would compile one specialisation per value (issue 14)
+    # np.int64(): a literal constant argument would compile one specialisation per value
     if sampled_mask & SAMPLED_INERTIAL:
         state.rejected[0] = ensemble_vectors(values, np.int64(0), p.mode, thr[0], state.scratch, out[0])
         state.rejected[1] = ensemble_vectors(values, np.int64(1), p.mode, thr[1], state.scratch, out[1])

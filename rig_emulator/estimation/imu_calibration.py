@@ -68,7 +68,7 @@ def nominal_calibration(truth: ImuModulesTruth) -> ImuCalibration:
                           {"kind": "nominal datasheet scaling"})
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def apply_imu_calibration(raw, cal, out_si, n_sensors=3):
     """Raw counts (n, 9) -> calibrated SI (n, 3, 3) ``[module, sensor, axis]`` (Sec. 4-1).
 

@@ -8,7 +8,7 @@ Per load-cell sample (period ``dt_s``) and cell:
    than ``jump_threshold_grf`` is replaced by the previous accepted value. Reading: the
    paper never re-accepts; here after ``reaccept_after`` consecutive rejections a reading
    within the bounds is accepted again, so a genuine fast thrust change cannot lock the
-   guard forever (``reaccept_after = 0`` is the paper-faithful "never"). Reading (issue 9,
+   guard forever (``reaccept_after = 0`` is the paper-faithful "never"). Reading (
    the paper's "reasonable bound for every variable"): a reading below ``min_thrust_grf``
    is discarded like one above the ceiling - a cell under a motor cannot be pulled up by
    hundreds of gram-force, but a dead cell (0 counts) reads about ``-C b`` = -850 grF, which
@@ -106,7 +106,7 @@ def load_cell_filter_state(n_cells: int) -> np.ndarray:
     return np.zeros((n_cells, 6))
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def load_cell_filter_step(raw_counts, p, state, out_N):
     """One load-cell sample: guards + filter; writes thrust [N] per cell into ``out_N``.
 

@@ -15,7 +15,7 @@ from rig_emulator.control.thrust_direction import thrust_direction
 from rig_emulator.physics.ground import hold_on_ground
 
 
-@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile (issue 14)
+@jit(nrt=False)  # a call, not inline="always": inlining it cost most of the cold compile
 def onboard_translation_step(dt, phi, theta, psi, u1, mass, g, fwx, fwy, fwz, ground, ground_hold, state):
     """Advance ``state`` = (position 0:3, velocity 3:6) by ``dt`` (world ENU); ``ground``:
     ``sim.ground``, ``ground_hold``: ``sim.ground_contact == "hold"``."""

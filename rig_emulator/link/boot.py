@@ -1,5 +1,5 @@
 """The link while the rig starts: HEARTBEAT (MAV_STATE_BOOT) from the first second, before the
-step loop is compiled (issue 14).
+step loop is compiled.
 
 A cold numba cache compiles the step loop for minutes; ground stations give up on a vehicle
 that says nothing for 15-20 s (MAVSDK, MAVProxy). ``rig-emulator serve`` therefore opens its

@@ -23,7 +23,7 @@ or AUTO.MISSION): a script uploads, arms and starts at its own pace and the flig
 in simulated time from the start, is the same run after run (``rig-gcs reproduce`` flies
 the Fig. 19 rectangle this way).
 
-Start-up (issue 14): the endpoints open first and the ``rig-emulator: serving URL`` lines are
+Start-up: the endpoints open first and the ``rig-emulator: serving URL`` lines are
 printed at once; until the rig is built and its step loop compiled (minutes with a cold numba
 cache, about a second with a warm one) a :class:`~rig_emulator.link.boot.BootLink` speaks for
 it: HEARTBEAT with MAV_STATE_BOOT within the first seconds, STATUSTEXT "starting: compiling

@@ -87,7 +87,7 @@ class RigServer:
         self.signing = signing
         if signing is not None:
             signing.bind(self)
-        # issue 16: a controller plug-in's own parameters are served after the rig's (parameters/plugin_params.py)
+        # a controller plug-in's own parameters are served after the rig's (parameters/plugin_params.py)
         self.params = ParamService(rig, self, table=ParamTable(rig.controller, source=rig),
                                    store=state.params if state is not None else None)
         self.console = Console(enabled=console)
@@ -105,7 +105,7 @@ class RigServer:
         self.offboard_loss = OffboardLossMonitor(self, self.offboard)
         self.fence = FenceMonitor(self)
         self.ctx.fence = self.fence
-        self.ftp = FtpServer(FileStore(metadata_files(rig.controller)))  # issue 16: with the plug-in's parameters
+        self.ftp = FtpServer(FileStore(metadata_files(rig.controller)))  # with the plug-in's parameters
         self.endpoints = []
         try:
             for spec in endpoints:  # connection strings, or endpoints opened already (a BootLink's)

@@ -1,4 +1,4 @@
-"""The real rig's departures from the ideal plant (issue 13): one named function per effect.
+"""The real rig's departures from the ideal plant: one named function per effect.
 
 Every effect has a neutral value that leaves the ideal plant of Eq. 1-3 and Eq. 40 exactly
 as it was (the ``hilms-ideal`` airframe uses only neutral values, bit for bit); the
@@ -30,7 +30,7 @@ effect (function)               acts on                                parameter
 
 Model mismatch (``controller_model.*``) and the position FLC's rate input
 (``flc.position_rate_share``) are controller-side: :mod:`rig_emulator.simulation.params`.
-Sources of the magnitudes are given per function and in docs/REPRODUCTION.md.
+Sources of the magnitudes are given per function and in docs/explanation/readings.md.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ def joint_friction_torque(wx, wy, wz, hw):
     joint of this size (about 20 mm ball, 2.2 kg on it) has a breakaway torque of the
     order of 0.01-0.05 N m; the viscous part (cable drag, grease) 0.005-0.05 N m s/rad.
     Source: the rig's Fig. 12 responses settle without limit cycles (RIG-SPEC), and a
-    failsafe trip must be recoverable (issue 13): without friction a disarmed rig spins
+    failsafe trip must be recoverable: without friction a disarmed rig spins
     for ever.
     """
     if not hw.friction:
@@ -342,7 +342,7 @@ _LEAD_FIELD_Y = (1.0, 0.0, -1.0, 0.0)
 
 
 # a call, not inline="always": it runs at the magnetometer rate only, and inlined into the step loop it
-# slowed both plants by 0.6 us a step (benchmarks/README.md, hardware-rig, session 12)
+# slowed both plants by 0.6 us a step (docs/explanation/performance.md, hardware-rig)
 @jit(nrt=False)
 def motor_field_step(x, pp, field_out):
     """Magnetic field of the four motors' currents at the IMU modules (B, T), one magnetometer sample.
@@ -359,7 +359,7 @@ def motor_field_step(x, pp, field_out):
     drivers of Sec. 4-1 at the 850 gr.F ceiling, scaled by (557.7 / 850)^1.5) gives
     ``mu0 I s / (2 pi r^2)`` = 2 uT of steady field (20 mG, 4 % of the site's 47 uT); the ripple is
     a fraction of that after the drivers' input capacitors (``hilms``: 0.32 uT, fitted to Table 6's
-    two psi; the paper's equal psi bound the steady part near 0: docs/REPRODUCTION.md, "Table 6's
+    two psi; the paper's equal psi bound the steady part near 0: docs/explanation/readings.md, "Table 6's
     yaw"). This is what ArduPilot's compass-motor calibration measures (field per amp of current).
     ``x`` is the rig state (motor voltages in ``x[13:17]``), ``pp`` the PhysicsParams; writes
     ``field_out`` (3,).

@@ -18,7 +18,7 @@ def rk4_step(t, h, x, v_cmd, p, wind, gusts, shocks, extra, work, R):
     through one call site. A call of a compiled function passes every field of every array
     and namedtuple argument one by one (numba flattens them), and ``p`` with its hardware
     parameters is some 130 values: as calls, the five per step cost the ideal plant about a
-    fifth of its step (benchmarks/README.md, hardware-rig). The stage state of k1 is a copy
+    fifth of its step (docs/explanation/performance.md, hardware-rig). The stage state of k1 is a copy
     of ``x`` (the same values), so the arithmetic is that of the four separate calls.
     """
     n = x.shape[0]

@@ -1,7 +1,7 @@
 """Equations of motion of the rig: Eq. 1 (virtual translation) and Eq. 3 (rotation on the joint).
 
 ``state_derivative`` fills ``dx`` with the time derivative of the 17-entry state
-(docs/CONVENTIONS.md) for the held motor voltage commands ``v_cmd``:
+(docs/explanation/conventions.md) for the held motor voltage commands ``v_cmd``:
 
 * Eq. 1: ``m r'' = [0, 0, -m g] + R_WB [-f_xB, -f_yB, -f_zB - sum F_i]``; the disturbance
   force enters as a world-frame wind force ``F_w = -R_WB f_B``.
@@ -10,9 +10,9 @@
   and ``-T_B`` the shocks plus the extra masses' gravity torque.
 * Quaternion kinematics ``q' = q (x) (0, omega_B) / 2``.
 * Motor lag ``V' = (V_cmd - V) / tau_motor``.
-* Motor faults (issue 9): motor i produces ``thrust_efficiency[i]`` (1 healthy, 0 dead) of
+* Motor faults: motor i produces ``thrust_efficiency[i]`` (1 healthy, 0 dead) of
   Eq. 40's thrust; its rotor speed and reaction moment follow the thrust it produces.
-* Hardware effects (issue 13, :mod:`rig_emulator.physics.hardware`): each motor's true
+* Hardware effects (:mod:`rig_emulator.physics.hardware`): each motor's true
   thrust (:func:`~rig_emulator.physics.hardware.motor_thrust`), and joint friction, the
   centre of gravity's offset from the pivot and the random body torque added to Eq. 3's
   torques (none of them in the ideal plant).
@@ -73,7 +73,7 @@ def state_derivative(t, x, v_cmd, p, wind, gusts, shocks, extra, R, dx):
     tx = u2 - cx + stx + gtx
     ty = u3 - cy + sty + gty
     tz = u4 - cz + gtz
-    if hw.friction or hw.cog_on or hw.noise_on:  # issue 13: the real rig's joint and body torques
+    if hw.friction or hw.cog_on or hw.noise_on:  # the real rig's joint and body torques
         fx, fy, fz = joint_friction_torque(wx, wy, wz, hw)
         bx, by, bz = cog_gravity_torque(R, hw, p.g)
         nt = hw.noise_torque

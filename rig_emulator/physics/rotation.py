@@ -1,6 +1,6 @@
 """Attitude math: quaternions, the rotation matrix of Eq. 2, Euler angles, Euler rates.
 
-Conventions (docs/CONVENTIONS.md): the state holds the unit quaternion ``q = (w, x, y, z)``
+Conventions (docs/explanation/conventions.md): the state holds the unit quaternion ``q = (w, x, y, z)``
 of ``R_WB`` (body B -> world W, B = FRD, W = ENU). The paper's Euler angles are the
 Z-Y-X angles of ``Q = R_WB diag(1,-1,-1)``, so that Eq. 2 holds:
 ``R_WB = Rz(psi) Ry(theta) Rx(phi) diag(1,-1,-1)``.

@@ -1,4 +1,4 @@
-"""Layout of the rig's 17-entry state vector (docs/CONVENTIONS.md)."""
+"""Layout of the rig's 17-entry state vector (docs/explanation/conventions.md)."""
 
 POS = 0  # virtual position, world ENU (Eq. 1), 3 entries
 VEL = 3  # virtual velocity, world ENU, 3 entries

@@ -1,4 +1,4 @@
-"""Fault modes of the rig's devices, switchable at run time (issue 9).
+"""Fault modes of the rig's devices, switchable at run time.
 
 The sensor sampling functions read a per-unit ``mode`` (int64) and ``magnitude`` (float64)
 array that the caller may change between steps; a motor fault is a per-motor thrust

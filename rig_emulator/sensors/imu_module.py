@@ -244,16 +244,16 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
 
 # a call, not inline="always": it has two call sites (the step loop through sensors_step, and
 # sample_imu_modules for the calibration); inlining it together with control_update (13ee116, typing
-# it twice) cost about 12 % of the cold compile for about 0.1 us a step (benchmarks/README.md, hardware-rig)
+# it twice) cost about 12 % of the cold compile for about 0.1 us a step (docs/explanation/performance.md, hardware-rig)
 @jit(nrt=False)
 def _sample_imu_modules(q, omega_B, omega_dot_B, vib, field_B, do_inertial, do_mag, k, walk, fault_mode,
                         fault_magnitude, rng, raw_out):
     """:func:`sample_imu_modules` without reference counting, for the step loop.
 
-    ``vib`` (6,): the frame vibration every module sees alike (issue 13,
+    ``vib`` (6,): the frame vibration every module sees alike (
     :func:`rig_emulator.physics.hardware.frame_vibration_step`): gyro (0:3, rad/s) added to
     ``omega_B``, accelerometer (3:6, m/s^2) added to the specific force; zeros on the ideal plant.
-    ``field_B`` (3,): the magnetic field of the motor currents at the modules (issue 13,
+    ``field_B`` (3,): the magnetic field of the motor currents at the modules (
     :func:`rig_emulator.physics.hardware.motor_field_step`), T, added to the Earth's field every
     module measures; zeros on the ideal plant.
     """

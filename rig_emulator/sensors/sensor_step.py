@@ -39,8 +39,8 @@ SensorState = namedtuple(
         "imu_fault_magnitude",   # (n_modules,) float64
         "cell_fault_mode",       # (n_cells,) int64
         "cell_fault_magnitude",  # (n_cells,) float64
-        "frame_vibration",       # (6,) gyro (rad/s), accel (m/s^2) every module sees alike (issue 13)
-        "motor_field",           # (3,) magnetic field of the motor currents at the modules, B, T (issue 13)
+        "frame_vibration",       # (6,) gyro (rad/s), accel (m/s^2) every module sees alike
+        "motor_field",           # (3,) magnetic field of the motor currents at the modules, B, T
     ],
 )
 

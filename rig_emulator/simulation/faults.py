@@ -1,4 +1,4 @@
-"""Fault injection into a rig and the plain-data fault status it reports (issue 9).
+"""Fault injection into a rig and the plain-data fault status it reports.
 
 :class:`FaultInjector` switches IMU modules, load cells and motors into the fault modes of
 :mod:`rig_emulator.sensors.faults`, from the config's timed ``faults.events`` or from a

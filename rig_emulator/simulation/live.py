@@ -161,7 +161,7 @@ class _Lazy:
 
 class _LiveSnapshot(RigSnapshot):
     """The snapshot :meth:`LiveRig.snapshot` returns: a :class:`RigSnapshot` whose sensor readings
-    and fault status are built only when read (issue 14: a served rig takes a snapshot every chunk
+    and fault status are built only when read (a served rig takes a snapshot every chunk
     and most chunks' messages read neither). What they are built from is copied when the snapshot
     is taken, so they are the values of that instant whenever they are read."""
 

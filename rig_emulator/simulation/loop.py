@@ -16,7 +16,7 @@ built-in control update when ``pl.mode`` is not ``P_NONE``; with ``P_EXTERNAL`` 
 controller runs and the motor voltages ``v_cmd`` are whatever the caller set (lockstep).
 Without a plug-in ``pfn`` is None: numba prunes the plug-in branch at compile time, so the
 loop a rig without a plug-in compiles leaves the plug-in path out (a rig with one compiles
-its own specialisation, with it; issue 14).
+its own specialisation, with it).
 
 Reading: the accelerometers' lever-arm term uses the angular acceleration of the
 previous step's first RK4 stage.
@@ -66,9 +66,9 @@ def _sense(k, x, pp, sp, ss, rng, omega_dot):
             f = motor_thrust(x[13 + i], i, pp.k_v, pp.f_ceiling, pp.thrust_efficiency[i], pp.hw)
             ss.thrust_true[i] = f
             ss.rotor_speed[i] = rotor_speed(f, pp.kf)
-    if pp.hw.vib_on and k % sp.suite.imu.decim_inertial == 0:  # issue 13: frame vibration, all modules alike
+    if pp.hw.vib_on and k % sp.suite.imu.decim_inertial == 0:  # frame vibration, all modules alike
         frame_vibration_step(sp.suite.imu.dt_s * sp.suite.imu.decim_inertial, x, pp, ss.sstate.frame_vibration)
-    # issue 13: the motor currents' field at the magnetometers, all modules alike
+    # the motor currents' field at the magnetometers, all modules alike
     if (pp.hw.mag_ripple > 0.0 or pp.hw.mag_steady > 0.0) and k % sp.suite.imu.decim_mag == 0:
         motor_field_step(x, pp, ss.sstate.motor_field)
     mask = sensors_step(k, x[6:10], x[10:13], omega_dot, ss.thrust_true, ss.rotor_speed,
@@ -143,14 +143,14 @@ def run_steps(
                         ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
                     )
                     eq40 = True
-                elif pfn is not None:  # a controller plug-in (issue 16); without one (P_EXTERNAL: v_cmd set from outside)
-                    # pfn is None, and numba drops this branch and never compiles the plug-in path (issue 14)
+                elif pfn is not None:  # a controller plug-in; without one (P_EXTERNAL: v_cmd set from outside)
+                    # pfn is None, and numba drops this branch and never compiles the plug-in path
                     if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                                           ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
                         armed = False  # the plug-in failed: motors off from the next step (pl.status says why)
                     else:
                         eq40 = pl.kind != K_VOLTAGES  # a plug-in's voltages bypass it
-                if eq40 and cp.thrust_loop_rate > 0.0 and sp.simulate:  # issue 13: Sec. 3-3's load-cell thrust loop
+                if eq40 and cp.thrust_loop_rate > 0.0 and sp.simulate:  # Sec. 3-3's load-cell thrust loop
                     thrust_loop(ctrl_dt, cp, cstate, cout, ss.thrust_est, us.flags[F_CELLS], v_cmd)
             if k % up.div == 0 and supervise(t, armed, sp.simulate, sp.estimated, phi, theta, wx, wy, wz, cout,
                                              ss.awork.ensemble.rejected, ss.awork.combined, ss.health[1], up, us):
@@ -158,7 +158,7 @@ def run_steps(
         if k % log_div == 0 and log_row < log.shape[0]:
             _log_row(log[log_row], t, x, pp, sp, ss, ref, cout, gstate, v_cmd, us)
             log_row += 1
-        # issue 13: the command reaches the motors through the ESC chain (delay, quantisation,
+        # the command reaches the motors through the ESC chain (delay, quantisation,
         # dead-band; v_cmd itself in the ideal plant), the random body torque is held over the step
         torque_noise_step(x, pp)
         rk4_step(t, dt, x, actuator_chain(k, v_cmd, pp.hw), pp, wind, gusts, shocks, extra, work, R)

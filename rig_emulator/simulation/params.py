@@ -1,7 +1,7 @@
 """Pack a validated :class:`~rig_emulator.config.loader.RigConfig` into the compiled loop's arguments.
 
 The compiled code receives plain namedtuples of floats and float64 arrays (never module
-globals, docs/CONVENTIONS.md). This module is the one place where paper units are turned
+globals, docs/explanation/conventions.md). This module is the one place where paper units are turned
 into SI (degrees -> rad, gram-force -> N) and names into integer codes.
 """
 
@@ -28,7 +28,7 @@ PhysicsParams = namedtuple(
     # ground_hold: sim.ground_contact == "hold", the virtual ground's resting contact (physics/ground.py)
     "ground_hold "
     # thrust_efficiency: (4,) share of Eq. 40's thrust each motor produces (motor faults);
-    # hw: HardwareParams, the real rig's effects (issue 13, physics/hardware.py)
+    # hw: HardwareParams, the real rig's effects (physics/hardware.py)
     "thrust_efficiency hw",
 )
 
@@ -60,7 +60,7 @@ def _hover_rotor_speed(cfg: RigConfig) -> float:
 
 
 def hardware_params(cfg: RigConfig, k_v: float, dt: float, previous: HardwareParams | None = None) -> HardwareParams:
-    """The real rig's effects (issue 13) from the config; SI here (gr.F -> N, seconds -> steps).
+    """The real rig's effects from the config; SI here (gr.F -> N, seconds -> steps).
 
     ``previous``: the running rig's HardwareParams whose state (command buffer, noise, phases,
     random stream) a parameter change keeps when its shape allows.
@@ -186,7 +186,7 @@ def _flc_axes(cfg: RigConfig):
 
 def smc_gains_si(cfg: RigConfig, ixx: float, iyy: float, izz: float, arm_length: float,
                  km_over_kf: float) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. 41's K and lambda in the SI units the SMC of Eq. 9 uses, by their readings (issue 13).
+    """Eq. 41's K and lambda in the SI units the SMC of Eq. 9 uses, by their readings.
 
     ``smc.gain_reading``: 'si' K in rad/s^2 as printed; 'thrust' K is a thrust difference in
     N, so the switching torque is ``K l`` (roll, pitch) or ``K kM/kF`` (yaw, A6) and

@@ -1,4 +1,4 @@
-"""Which controller plug-in a rig flies with (issue 16), from its arguments or its config."""
+"""Which controller plug-in a rig flies with, from its arguments or its config."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""The step loop's random generator, handed over as its bit generator's pointers (issue 14,
-cold compile; issue 16, the cost of entering the loop).
+"""The step loop's random generator, handed over as its bit generator's pointers (less to
+compile, and less to pay each time the loop is entered).
 
 numba unboxes a ``numpy.random.Generator`` argument into a struct holding a reference-counted
 handle on the Python object (a meminfo): only a function compiled with numba's reference

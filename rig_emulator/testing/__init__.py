@@ -4,5 +4,5 @@
   with pymavlink clients (``connect``, ``recv``, ``command``, ``MissionClient``, ...).
 * :mod:`.relay` - a lossy, laggy UDP relay between a ground station and a rig.
 * :mod:`.fuzz` / :mod:`.fuzz_session` - hostile frames, the oracle of how the rig counts
-  them, and a flood-and-check session over real sockets (``scripts/fuzz_link.py``).
+  them, and a flood-and-check session over real sockets (``benchmarks/fuzz_link.py``).
 """

@@ -1,4 +1,4 @@
-"""Fuzz a running rig over real sockets and check it afterwards (``scripts/fuzz_link.py``, tests).
+"""Fuzz a running rig over real sockets and check it afterwards (``benchmarks/fuzz_link.py``, tests).
 
 :func:`fuzz_rig` talks to a rig process (:class:`~rig_emulator.testing.rig.RigProcess`) that
 serves a ``tcpin`` and a ``udpin`` endpoint:

@@ -315,7 +315,7 @@ class RigThread(_RigBase):
         from rig_emulator.link.signing.policy import LinkSigning
 
         cfg = load_config(airframe=airframe, scenario=scenario, overrides=overrides or {})
-        rig = prepare_rig(cfg, controller)  # controller: a plug-in object (issue 16)
+        rig = prepare_rig(cfg, controller)  # controller: a plug-in object
         self.state = None if state_dir is None else RigState(state_dir, None)
         signing = None
         if signing_key is not None:

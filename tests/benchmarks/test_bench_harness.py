@@ -224,7 +224,7 @@ def test_rig_core_summary_targets():
         stats[_probe_name(sc, "ideal")] = ProbeStats(_probe_name(sc, "ideal"), [dict(ideal_run), dict(ideal_run)])
     metrics = {m.name: m for m in rig_core(stats)}
     rtf = metrics["hover: full-fidelity real-time factor"]
-    # issue 8's 300x and issue 13's 500x for the hardware rig
+    # the 300x and the 500x for the hardware rig
     assert rtf.value == 600.0 and len(rtf.targets) == 2 and all(t.met(rtf.value) for t in rtf.targets)
     assert not all(t.met(450.0) for t in rtf.targets)
     vs = metrics["helix: full-fidelity speed vs RotorPy"]

@@ -1,4 +1,4 @@
-"""`rig-gcs --help` and `rig-gcs errors` load only what they use (issue 14: every call took about
+"""`rig-gcs --help` and `rig-gcs errors` load only what they use (every call took about
 2 s of imports): no numba, scipy, matplotlib or rig emulator; --help not even numpy or the dialect."""
 
 import subprocess

@@ -1,4 +1,4 @@
-"""rig-gcs over a bad link (issue 9 B): a UDP relay (rig_emulator.testing.relay) drops 20 % of
+"""rig-gcs over a bad link: a UDP relay (rig_emulator.testing.relay) drops 20 % of
 the datagrams each way, duplicates 10 %, re-orders 10 % and delays each by 20-50 ms. Parameter
 download, parameter set and load, commands and mission transfer complete and are exactly right;
 over a dead link (100 % loss) each fails with a clear error after the protocol's retries."""

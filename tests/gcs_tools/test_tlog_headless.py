@@ -17,7 +17,7 @@ from protocol.mean_error import COLUMNS
 from rig_emulator.api import simulate as _simulate
 from rig_emulator.link.telemetry.tlog_export import TlogWriter, export_tlog
 
-# issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
+# these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
 simulate = functools.partial(_simulate, airframe="hilms-ideal")
 
 MAVLOGDUMP = os.path.join(os.path.dirname(sys.executable), "mavlogdump.py")
@@ -95,7 +95,7 @@ def test_csv_export(run, tmp_path):
                  "ATTITUDE.roll,LOCAL_POSITION_NED.x,HILMS_LOAD_CELLS.thrust_n[2],NAMED_VALUE_FLOAT.LC1_N"]) == 0
     rows = csv_path.read_text().splitlines()
     assert rows[0] == ("timestamp_s,ATTITUDE.roll_rad,LOCAL_POSITION_NED.x_m,HILMS_LOAD_CELLS.thrust_n[2],"
-                       "NAMED_VALUE_FLOAT.LC1_N")  # units in the names (issue 14); thrust_n and LC1_N carry theirs
+                       "NAMED_VALUE_FLOAT.LC1_N")  # units in the names; thrust_n and LC1_N carry theirs
     last = rows[-1].split(",")
     assert all(v != "" for v in last)
     att = [m.roll for m in iter_tlog(path, {"ATTITUDE"})]

@@ -1,4 +1,4 @@
-"""CSV column names end with their unit (issue 14), the project's `thrust_grf` / `phi_deg` convention."""
+"""CSV column names end with their unit, the project's `thrust_grf` / `phi_deg` convention."""
 
 from protocol.column_units import unit_token, with_unit
 

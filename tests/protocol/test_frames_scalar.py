@@ -1,4 +1,4 @@
-"""The scalar frame functions (the served rig's per-chunk messages, issue 14) give bit for bit
+"""The scalar frame functions (the served rig's per-chunk messages) give bit for bit
 what their array forms give: random attitudes, attitudes with exact and signed zeros, NaN."""
 
 import itertools

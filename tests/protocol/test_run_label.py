@@ -1,4 +1,4 @@
-"""The run label a headless .tlog starts with (STATUSTEXT chunks) for plot titles (issue 14)."""
+"""The run label a headless .tlog starts with (STATUSTEXT chunks) for plot titles."""
 
 
 def test_a_long_run_label_goes_in_chunks_and_back():

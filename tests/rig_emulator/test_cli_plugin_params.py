@@ -1,4 +1,4 @@
-"""A controller plug-in's own parameters from the command line (issue 16): `rig-emulator params`
+"""A controller plug-in's own parameters from the command line: `rig-emulator params`
 lists them, `--set controller.params.NAME=VALUE` sets them for simulate and serve (and the same
 dotted key in the Python API and SimJob), checked against the plug-in's declaration."""
 

@@ -1,4 +1,4 @@
-"""The cold compile's helper process (rig_emulator/compile_helper.py, issue 14): its signatures are the
+"""The cold compile's helper process (rig_emulator/compile_helper.py): its signatures are the
 ones numba types the step loop's calls with, this process picks its results up from the cache, and it
 falls back to compiling here when the helper fails, hangs or is not wanted."""
 

@@ -51,7 +51,7 @@ def test_nrt_false_compiles_without_reference_counting():
 
 
 def test_a_loop_only_function_called_from_python_runs_its_twin():
-    # nrt=False: no CPython wrapper (issue 14, cold compile); a call from Python compiles a twin
+    # nrt=False: no CPython wrapper (cold compile); a call from Python compiles a twin
     f = jit(nrt=False, cache=False)(_loop_with_branches)
     out = np.zeros(1)
     f(Pair(np.arange(3.0), np.arange(3.0) + 10.0), out, 5)
@@ -77,7 +77,7 @@ STEP_LOOP = (
     loop.run_steps, loop._log_row,
     # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step and control_update's stages are
     # inline="always" (a call passed their namedtuples field by field every step or control step,
-    # benchmarks/README.md)
+    # docs/explanation/performance.md)
     integrator.apply_ground, ground.hold_on_ground,
     disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
     rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
@@ -85,7 +85,7 @@ STEP_LOOP = (
     runner.guidance_update, runner._waypoints, runner._start_leg, runner._advance, runner.start_at,
     trajectories.helix_eq46, trajectories.harmonic_attitude, waypoint_switching.line_setpoint,
     imu_module._sample_imu_modules, supervisor.supervise,
-    # called, not inlined (the cold compile, issue 14)
+    # called, not inlined (the cold compile)
     attitude_pipeline.attitude_estimation_step,
     load_cell_filter.load_cell_filter_step, onboard_position.onboard_translation_step, smc.smc_attitude,
     fuzzy.flc_eval, fuzzy.flc_axis, allocation.allocate, pid.pid_axis, complementary.complementary_step,

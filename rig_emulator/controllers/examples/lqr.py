@@ -6,7 +6,7 @@ the state ``z = (int e, e, e')`` with ``z' = A z + B v`` (``A`` the 3x3 shift, `
 after the sign flip); the gain ``K = R^-1 B^T P`` of the continuous-time algebraic Riccati
 equation ``A^T P + P A - P B R^-1 B^T P + Q = 0`` (``scipy.linalg.solve_continuous_are``)
 minimises ``int z^T Q z + R v^2``. The torque about each Euler axis is
-``tau = I (r'' + K z)``, turned to body axes like the rig's own laws (docs/CONVENTIONS.md).
+``tau = I (r'' + K z)``, turned to body axes like the rig's own laws (docs/explanation/conventions.md).
 
 It replaces the attitude loop only: the configured strategy's position loop (the paper's
 fuzzy one with ``smc-flc``) hands it the shaped attitude reference and u1

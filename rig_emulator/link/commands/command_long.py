@@ -19,7 +19,7 @@ SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MISSION_START and
 DO_SET_MISSION_CURRENT (:mod:`rig_emulator.link.mission.executor`), PREFLIGHT_CALIBRATION (param1,
 gyro, or param2, magnetometer, or param5, accelerometer = 1: reruns the IMU calibration
 procedure of Sec. 4-1, disarmed only), MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
-MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/FAULTS.md),
+MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/how-to/faults.md),
 DO_FENCE_ENABLE (param1 0/1: the geofence off/on for this run).
 A supported command with unusable parameters is DENIED with a STATUSTEXT saying why.
 A shock outside the ranges of the config's ``disturbance.shocks`` entries (torque within

@@ -40,7 +40,7 @@ def parse_params(doc: dict, state: StateDir, table: ParamTable) -> dict[str, flo
     out = {}
     for name, value in params.items():
         if name in RENAMED and RENAMED[name] not in params:
-            name = RENAMED[name]  # served under PX4's name since issue 15; rewritten so on the next save
+            name = RENAMED[name]  # served under PX4's name; rewritten so on the next save
         if name not in table.by_name:
             raise state.error(FILE, f"params.{name}", "no such parameter on this rig")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):

@@ -136,7 +136,7 @@ SHORT_NAMES: dict[str, tuple[str, tuple | None]] = {
     "failsafe.gcs_action": ("NAV_DLL_ACT", None),
     "prearm.max_tilt_deg": ("ARM_MAX_TILT", None),
     "prearm.max_rate_deg_s": ("ARM_MAX_RATE", None),
-    # the hardware rig's effects and readings (issue 13; rig_emulator/physics/hardware.py)
+    # the hardware rig's effects and readings (rig_emulator/physics/hardware.py)
     "motors.thrust_gain": ("MOT_GAIN", ("1", "2", "3", "4")),
     "motors.thrust_bias_grf": ("MOT_BIAS_GRF", None),
     "motors.curve_exponent": ("MOT_CURVE_N", None),

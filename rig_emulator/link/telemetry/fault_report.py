@@ -1,4 +1,4 @@
-"""STATUSTEXT for faults (issue 9): each injection, each detection, the failsafe - once per change.
+"""STATUSTEXT for faults: each injection, each detection, the failsafe - once per change.
 
 The rig exposes plain data: the list of fault injections (:meth:`LiveRig.fault_events`,
 from the config's timed events or a command) and a
@@ -12,7 +12,7 @@ from the config's timed events or a command) and a
 * the fused attitude estimate becomes invalid / valid: CRITICAL / INFO;
 * the loss-of-control failsafe trips: CRITICAL ``"loss of control: attitude error 97 deg >
   45 deg for 0.5 s; motors stopped, disarmed"``; it clears when the rig is armed again.
-* a controller plug-in fails while flying (issue 16; :attr:`LiveRig.plugin_failure`):
+* a controller plug-in fails while flying (:attr:`LiveRig.plugin_failure`):
   CRITICAL ``"controller my_pkg.mod:MyController at t = 3.000 s: RuntimeError: ... (mod.py:41
   in update); motors stopped, disarmed; arm again to retry"``, and INFO when arming
   clears it.

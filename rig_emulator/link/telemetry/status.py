@@ -10,7 +10,7 @@ shows a "supports PX4 Pro firmware 1.4.1 and above" notice for it; nothing else 
 EXTENDED_SYS_STATE.landed_state: ON_GROUND while disarmed, TAKEOFF while a take-off climbs,
 LANDING while a landing descends (land detector on), else IN_AIR.
 
-Faults (docs/FAULTS.md) map onto SYS_STATUS health bits and HEARTBEAT.system_status from the
+Faults (docs/how-to/faults.md) map onto SYS_STATUS health bits and HEARTBEAT.system_status from the
 snapshot's plain-data :class:`~rig_emulator.simulation.faults.FaultStatus`:
 
 * 3D_GYRO / 3D_ACCEL / 3D_MAG (the fused estimate the rig flies on): unhealthy while the
@@ -70,7 +70,7 @@ def heartbeat(snap, ctx):
     if snap.armed:
         base |= M.MAV_MODE_FLAG_SAFETY_ARMED
     status = system_status(snap)
-    if getattr(ctx.rig, "plugin_failure", None) is not None:  # a controller plug-in failed (issue 16): as the failsafe
+    if getattr(ctx.rig, "plugin_failure", None) is not None:  # a controller plug-in failed: as the failsafe
         status = M.MAV_STATE_EMERGENCY
     return M.MAVLink_heartbeat_message(
         type=M.MAV_TYPE_QUADROTOR, autopilot=M.MAV_AUTOPILOT_PX4, base_mode=base,

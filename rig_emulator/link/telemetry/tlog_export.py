@@ -175,7 +175,7 @@ def mission_messages(cfg, sysid: int = 1) -> list:
 
 
 def label_messages(label: str | None) -> list:
-    """STATUSTEXT (INFO) chunks naming the run (``protocol/run_label.py``; issue 14: plot titles); [] for None."""
+    """STATUSTEXT (INFO) chunks naming the run (``protocol/run_label.py``: the plots' titles); [] for None."""
     if not label:
         return []
     chunks = label_chunks(label)

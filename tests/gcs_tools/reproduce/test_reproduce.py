@@ -28,7 +28,7 @@ def _digests(directory: Path) -> dict:
 @pytest.fixture(scope="module")
 def two_runs(tmp_path_factory):
     a, b = tmp_path_factory.mktemp("repro-a"), tmp_path_factory.mktemp("repro-b")
-    # issue 13: these tests pin the ideal plant's verdicts (one plant, one seed, as before the two plants)
+    # these tests pin the ideal plant's verdicts (one plant, one seed, as before the two plants)
     first = reproduce(a, seed=2, workers=1, only=ONLY, quick=True, show_progress=False, plants=IDEAL, seeds=1)
     reproduce(b, seed=2, workers=1, only=ONLY, quick=True, show_progress=False, plants=IDEAL, seeds=1)
     return first, a, b

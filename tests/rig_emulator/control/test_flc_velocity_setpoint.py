@@ -1,5 +1,5 @@
 """The position FLC on the hardware plant (``hilms``: ``flc.position_rate_share`` below 1, 0.46
-since 2026-11-24, the error rate partly on the measurement) follows an offboard velocity set-point
+the error rate partly on the measurement) follows an offboard velocity set-point
 in full: an axis without a position reference tracks v_des - v. With the share applied to the
 velocity set-point too it settled at share x v_des (0.34 of a 0.5 m/s command at 0.65, measured
 before the fix)."""

@@ -6,7 +6,7 @@ import numpy as np
 
 from rig_emulator.api import simulate as _simulate
 
-# issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
+# these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
 simulate = functools.partial(_simulate, airframe="hilms-ideal")
 
 

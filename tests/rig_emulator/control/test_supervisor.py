@@ -1,4 +1,4 @@
-"""The supervisor (issue 9): debounced sensor flags, estimate validity, the loss-of-control latch."""
+"""The supervisor: debounced sensor flags, estimate validity, the loss-of-control latch."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""A starting rig speaks at once (issue 14): HEARTBEAT with MAV_STATE_BOOT while its step loop
+"""A starting rig speaks at once: HEARTBEAT with MAV_STATE_BOOT while its step loop
 compiles, commands refused with TEMPORARILY_REJECTED and a reason, then STANDBY on the same link.
 
 The compile is stood in for by the documented seam ``HILMS_SERVE_BOOT_DELAY_S`` (the rig waits

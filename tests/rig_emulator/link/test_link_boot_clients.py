@@ -1,4 +1,4 @@
-"""MAVProxy and MAVSDK-Python connect to a rig that is still starting (issue 14: on a cold first
+"""MAVProxy and MAVSDK-Python connect to a rig that is still starting (on a cold first
 start they gave up before its first HEARTBEAT) and work with it once it runs.
 
 The start takes longer than their connection timeouts (15-20 s): the documented seam

@@ -1,4 +1,4 @@
-"""Faults over MAVLink (issue 9): MAV_CMD_HILMS_SENSOR_FAULT, SYS_STATUS health, STATUSTEXT once, failsafe."""
+"""Faults over MAVLink: MAV_CMD_HILMS_SENSOR_FAULT, SYS_STATUS health, STATUSTEXT once, failsafe."""
 
 import time
 
@@ -88,7 +88,7 @@ def test_motor_thrust_loss_then_the_loss_of_control_failsafe(rig, client):
     assert command(client, FAULT, MOTOR, 2, M.HILMS_FAULT_THRUST_LOSS, 0.5).result == ACCEPTED
     assert _text(client, lambda t: t == "motor 2: thrust_loss 50 % injected") is not None
     assert _sys_status(client, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS) is not None
-    # the paper's SMC cannot hold 50 % on one motor (docs/FAULTS.md): loss of control, motors stopped
+    # the paper's SMC cannot hold 50 % on one motor (docs/how-to/faults.md): loss of control, motors stopped
     severity, lost = _text(client, lambda t: t.startswith("loss of control"))
     assert severity == M.MAV_SEVERITY_CRITICAL and "disarmed" in lost
     hb = recv(client, "HEARTBEAT", condition=lambda m: m.system_status == M.MAV_STATE_EMERGENCY)

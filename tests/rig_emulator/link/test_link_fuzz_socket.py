@@ -1,4 +1,4 @@
-"""A rig process flooded over real sockets (the in-suite cut of scripts/fuzz_link.py): 5,000 UDP
+"""A rig process flooded over real sockets (the in-suite cut of benchmarks/fuzz_link.py): 5,000 UDP
 datagrams of garbage, truncated, oversized, bad-CRC, relabelled, bit-flipped and CRC-valid
 random frames, and 500 frames as one TCP stream. The rig stays up, answers a command and a
 parameter read, counts every datagram exactly as a fresh pymavlink parser says it must

@@ -21,7 +21,7 @@ def test_mavproxy_is_installed():
 
 def test_mavproxy_fetches_params_and_shows_attitude(tmp_path):
     with RigProcess(speedup=1.0) as rig:
-        # with the project's mode module loaded at start (docs/GROUND_STATIONS.md): it must take the
+        # with the project's mode module loaded at start (docs/how-to/ground-stations.md): it must take the
         # mode command over from MAVProxy's own, which loads after --load-module modules
         args = ["--load-module=gcs_tools.mavproxy_px4modes"]
         with MAVProxySession(rig.tcp_url, tmp_path, args) as mp:

@@ -7,7 +7,7 @@ gets px4_map's tuple: struct.error, nothing is sent); the test records that for 
 name, loads the project's MAVProxy module ``gcs_tools.mavproxy_px4modes`` and sends every
 listed name with ``mode NAME``; one bare name (``posctl``) and the hand-typed fallback
 ``long DO_SET_MODE <base> <main> <sub>`` are checked too. The results (what the rig did with
-every name) are printed; docs/GROUND_STATIONS.md quotes them."""
+every name) are printed; docs/how-to/ground-stations.md quotes them."""
 
 import pytest
 from pymavlink import mavutil

@@ -1,6 +1,6 @@
 """A controller plug-in on a served rig, over real MAVLink (pymavlink): its failures reach the
 ground station (STATUSTEXT, HEARTBEAT) and the rig keeps serving, its own parameters are MAVLink
-parameters under its prefix, and it sees the offboard set-point as its reference (issue 16)."""
+parameters under its prefix, and it sees the offboard set-point as its reference."""
 
 import math
 import time

@@ -1,4 +1,4 @@
-"""The real rig's effects (issue 13, physics/hardware.py): sign and size of each, neutral = ideal."""
+"""The real rig's effects (physics/hardware.py): sign and size of each, neutral = ideal."""
 
 import math
 

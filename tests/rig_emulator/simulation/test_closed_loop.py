@@ -10,7 +10,7 @@ from protocol.mean_error import PAPER_TABLE_6
 from rig_emulator.api import simulate as _simulate
 from rig_emulator.config.loader import ConfigError
 
-# issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
+# these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
 simulate = functools.partial(_simulate, airframe="hilms-ideal")
 
 

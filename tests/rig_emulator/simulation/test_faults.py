@@ -1,7 +1,7 @@
-"""Faults from the config (issue 9): the degradation docs/FAULTS.md states, headless.
+"""Faults from the config: the degradation docs/how-to/faults.md states, headless.
 
 Each run injects its fault at t = 5 s through ``faults.events``; the bounds are the measured
-figures of docs/FAULTS.md (scripts/measure_faults.py, seeds 0-2) with a margin.
+figures of docs/how-to/faults.md (python -m gcs_tools.studies faults, seeds 0-2) with a margin.
 """
 
 import functools
@@ -13,7 +13,7 @@ from rig_emulator.config.loader import ConfigError, load_config
 from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_ESTIMATE, ALERT_RATE
 from rig_emulator.simulation.run import Simulation
 
-# issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
+# these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
 simulate = functools.partial(_simulate, airframe="hilms-ideal")
 
 T0 = 5.0

@@ -1,4 +1,4 @@
-"""The motor currents' magnetic field (issue 13, physics/hardware.py ``motor_field_step``) reaches the
+"""The motor currents' magnetic field (physics/hardware.py ``motor_field_step``) reaches the
 rig's heading through all five magnetometers alike: the ensemble of Sec. 4-1 cannot average it away."""
 
 import math

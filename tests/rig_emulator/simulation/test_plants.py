@@ -1,4 +1,4 @@
-"""Two plants, one flag (issue 13): ``hilms-ideal`` is the ideal plant bit for bit as before the
+"""Two plants, one flag: ``hilms-ideal`` is the ideal plant bit for bit as before the
 hardware effects existed; ``hilms`` (the default) is the hardware rig, deterministic, and its
 joint friction brings a disarmed, tumbling rig to rest."""
 
@@ -58,7 +58,7 @@ def _tumble(airframe: str, seconds: float) -> float:
 
 def test_joint_friction_brings_a_disarmed_tumbling_rig_to_rest_in_seconds():
     assert _tumble("hilms", 10.0) < 0.05  # at rest (a pendulum's last sway of a few hundredths)
-    assert _tumble("hilms-ideal", 10.0) > 5.0  # frictionless joint: it spins on for ever (issue 13)
+    assert _tumble("hilms-ideal", 10.0) > 5.0  # frictionless joint: it spins on for ever
     assert math.isfinite(_tumble("hilms", 1.0))
 
 
@@ -72,7 +72,7 @@ def _drop_after_jump(strategy: str, priority: str) -> float:
 
 
 def test_the_mixer_priority_decides_the_flc_altitude_drop_after_the_jump():
-    """docs/REPRODUCTION.md, "Table 6's altitude": the FLC answers the jump with a saturated pitch
+    """docs/explanation/readings.md, "Table 6's altitude": the FLC answers the jump with a saturated pitch
     transient; the roll/pitch-first mixer pays for it with u1 (the rig falls about 2 m, seeds 0-2:
     2.0-2.5 m), the u1-first mixer of the hardware rig does not (0.17 m, as the SMC-FLC's 0.17-0.28 m)."""
     assert load_config("hilms")["control.allocation_priority"] == "thrust"
@@ -86,7 +86,7 @@ def test_the_mixer_priority_decides_the_flc_altitude_drop_after_the_jump():
 
 
 def test_per_motor_clipping_lets_the_flc_yaw_law_take_the_motors():
-    """docs/REPRODUCTION.md, "Table 6's altitude", the third reading ("clip": each motor clipped on its
+    """docs/explanation/readings.md, "Table 6's altitude", the third reading ("clip": each motor clipped on its
     own, no priority): Table 3's FLC yaw output (up to 3 d1_u4 = 2.31 N m, 24x the 0.098 N m four
     motors give around hover) is no longer scaled into what is left, takes the motors when Eq. 46's
     jump at t = 12 s saturates them and the FLC loses the helix (seed 0: 4.9 m off the path and 47 deg

@@ -1,11 +1,11 @@
-"""The rig flies on its sensors (issue 3): estimation accuracy, faults, calibration, load-cell filters."""
+"""The rig flies on its sensors: estimation accuracy, faults, calibration, load-cell filters."""
 
 import functools
 import numpy as np
 import pytest
 
 from rig_emulator.api import simulate as _simulate
-# issue 13: these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
+# these tests pin the ideal plant's behaviour (the default airframe is now the hardware rig)
 simulate = functools.partial(_simulate, airframe="hilms-ideal")
 
 def _attitude_rms_deg(result, t0):

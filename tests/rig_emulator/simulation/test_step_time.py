@@ -1,4 +1,4 @@
-"""Simulated time in whole microseconds from the integer step counter (message stamps, issue 14)."""
+"""Simulated time in whole microseconds from the integer step counter (message stamps)."""
 
 import numpy as np
 

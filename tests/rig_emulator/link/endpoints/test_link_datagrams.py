@@ -1,4 +1,4 @@
-"""UDP: the frames of one tick packed into few datagrams (issue 14), every frame whole and parsable."""
+"""UDP: the frames of one tick packed into few datagrams, every frame whole and parsable."""
 
 import socket
 import time

@@ -39,7 +39,7 @@ def pid_flight():
     """A mission replaced while the rig flies at speed sends the paper's SMC into an 80 deg
     attitude error for seconds when the upload comes late (the virtual vehicle hits the ground
     and flies 160 m the wrong way before it recovers); the loss-of-control failsafe stops that
-    (docs/FAULTS.md). This protocol test does not depend on that luck: it flies the PID."""
+    (docs/how-to/faults.md). This protocol test does not depend on that luck: it flies the PID."""
     yield from _armed_rig({"control.strategy": "pid"})
 
 

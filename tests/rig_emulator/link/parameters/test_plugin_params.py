@@ -1,4 +1,4 @@
-"""A controller plug-in's parameters in the MAVLink parameter table and the component metadata (issue 16)."""
+"""A controller plug-in's parameters in the MAVLink parameter table and the component metadata."""
 
 import json
 

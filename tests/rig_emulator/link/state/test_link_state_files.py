@@ -53,7 +53,7 @@ def test_a_renamed_parameter_is_read_under_its_new_name(tmp_path):
         {"format": "hilms-sil parameters", "version": 1, "params": {"GUI_SPEED": 0.75}}))
     d = StateDir(tmp_path)
     store = ParamStore(d)
-    assert store.values == {"MPC_XY_CRUISE": 0.75}  # served under PX4's name since issue 15
+    assert store.values == {"MPC_XY_CRUISE": 0.75}  # served under PX4's name
     store.save("WP_RADIUS", 0.125)
     assert json.loads((tmp_path / "params.json").read_text())["params"] == {"MPC_XY_CRUISE": 0.75, "WP_RADIUS": 0.125}
     d.close()

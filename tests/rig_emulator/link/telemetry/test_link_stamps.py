@@ -1,4 +1,4 @@
-"""Message time stamps come from the integer step counter (issue 14): no stamp is 1 ms early."""
+"""Message time stamps come from the integer step counter: no stamp is 1 ms early."""
 
 import math
 
@@ -38,7 +38,7 @@ def test_headless_stamps_from_the_step_counter_and_bit_identical_tlogs(tmp_path)
 
 
 def test_rows_a_float_clock_stamped_early_are_exact():
-    """A 60 s headless run: 22 of its 6000 rows had ``int(t * 1000)`` 1 ms early (issue 14)."""
+    """A 60 s headless run: 22 of its 6000 rows had ``int(t * 1000)`` 1 ms early."""
     result = simulate("hover", duration=60.0, seed=4, airframe="hilms-ideal")
     t = result.series["t"]
     early = [k for k in range(t.size) if int(t[k] * 1000.0) != int(round(t[k] * 1e6)) // 1000]

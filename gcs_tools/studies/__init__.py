@@ -1,0 +1,16 @@
+"""Studies behind the explanation pages: each measures one question the paper leaves open.
+
+Run one with ``python -m gcs_tools.studies NAME [ARGS]`` (``--help`` after NAME for its
+options; ``python -m gcs_tools.studies`` lists them). They are long headless sweeps, not part
+of the test suite; the documentation includes their output with the command beside it.
+"""
+
+#: study name -> (module, one line on what it measures)
+STUDIES = {
+    "readings": ("readings", "every reading of Eq. 41 and of the motor ceiling against every claim of the paper"),
+    "chattering": ("chattering", "where the FLC's chattering on the hardware rig comes from (Fig. 12)"),
+    "table6": ("table6", "Table 6's altitude errors: Eq. 46's jump at t = 12 s through the mixer"),
+    "thrust-loop": ("thrust_loop", "the load-cell thrust loop's time constant against Fig. 17, and faulted cells"),
+    "paper-numbers": ("paper_numbers", "the paper's 18 numbers over a scan of one setting (rate share, delay, yaw)"),
+    "faults": ("faults", "how the rig degrades under each fault: estimation error, tracking error, failsafe"),
+}

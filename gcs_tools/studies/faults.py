@@ -1,0 +1,132 @@
+"""Measure how the rig degrades under each fault (the figures of docs/how-to/faults.md).
+
+Run from the repository root: ``python -m gcs_tools.studies faults [--seeds 0 1 2]``.
+Every case is a headless run of a scenario preset with one config fault event at
+``t = 5 s`` (``faults.events``); figures are taken from 5 s until the loss-of-control
+failsafe trips (or the end of the run), and the worst over the seeds is printed:
+
+* ``est``: the largest roll/pitch estimation error, |estimated - true| (deg);
+* ``track``: the largest roll/pitch tracking error, |desired - true| (deg);
+* ``yaw rate``: the largest |yaw rate| (deg/s);
+* ``drift``: how far the rig's own virtual position (Eq. 1 from its sensors) is from the
+  true virtual position at the end, minus the same without the fault (m; runs without a
+  failsafe trip only);
+* ``failsafe``: seconds from the fault to the failsafe and its cause (A attitude error,
+  R body rate, E estimate invalid) per seed, or ``-``;
+* ``after``: for runs that tripped, the largest body rate from 0.5 s after the trip to the
+  end divided by the body rate 0.5 s after the trip (1.00: the motors are off and the
+  rotation no longer grows), and the largest motor thrust at the end (N).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from rig_emulator.api import simulate
+from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_ESTIMATE, ALERT_RATE
+
+T_FAULT = 5.0
+HEAD = ("| case | est [deg] | track [deg] | yaw rate [deg/s] | drift [m] | failsafe | after |\n"
+        "|---|---|---|---|---|---|---|")
+
+
+def _events(device, indices, mode, magnitude):
+    return [{"t": T_FAULT, "sensor": device, "index": i, "mode": mode, "magnitude": magnitude} for i in indices]
+
+
+def _wrap_deg(a):
+    return (a + 180.0) % 360.0 - 180.0
+
+
+def _figures(result, baseline_drift):
+    s = result.series
+    t = s["t"]
+    fs = s["failsafe"]
+    tripped = fs.max() > 0
+    i_trip = int(np.argmax(fs > 0)) if tripped else len(t)
+    m = (t >= T_FAULT) & (np.arange(len(t)) < i_trip)
+    true = np.degrees(s["euler_true"][m, :2])
+    est = float(np.abs(_wrap_deg(np.degrees(s["euler"][m, :2]) - true)).max())
+    track = float(np.abs(_wrap_deg(np.degrees(s["euler_des"][m, :2]) - true)).max())
+    yaw_rate = float(np.degrees(np.abs(s["omega"][m, 2])).max())
+    if not tripped:
+        drift = float(np.linalg.norm(s["pos"][-1] - s["pos_true"][-1])) - baseline_drift
+        return est, track, yaw_rate, drift, None, None
+    cause = int(fs[i_trip])
+    tag = "".join(c for bit, c in ((ALERT_ATTITUDE, "A"), (ALERT_RATE, "R"), (ALERT_ESTIMATE, "E")) if cause & bit)
+    w = np.linalg.norm(s["omega"], axis=1)
+    j = int(np.searchsorted(t, t[i_trip] + 0.5))
+    after = (float(w[j:].max() / w[j]), float(s["thrust"][-1].max()))
+    return est, track, yaw_rate, None, (float(t[i_trip]) - T_FAULT, tag), after
+
+
+def case(scenario, strategy, events, seeds, extra=None):
+    rows = []
+    for seed in seeds:
+        base = simulate(scenario, strategy=strategy, seed=seed, overrides=dict(extra or {}))
+        bd = float(np.linalg.norm(base.series["pos"][-1] - base.series["pos_true"][-1]))
+        r = simulate(scenario, strategy=strategy, seed=seed, overrides={"faults.events": events, **(extra or {})})
+        rows.append(_figures(r, bd))
+    est = max(r[0] for r in rows)
+    track = max(r[1] for r in rows)
+    yaw = max(r[2] for r in rows)
+    drifts = [r[3] for r in rows if r[3] is not None]
+    drift = f"{max(drifts, key=abs):+.2f}" if drifts else "-"
+    trips = [r[4] for r in rows]
+    fs = "-" if all(x is None for x in trips) else ", ".join("-" if x is None else f"{x[0]:.2f} s {x[1]}" for x in trips)
+    afters = [r[5] for r in rows if r[5] is not None]
+    after = (f"{max(a[0] for a in afters):.2f}, {max(a[1] for a in afters):.1g} N") if afters else "-"
+    return f"| {est:.2f} | {track:.2f} | {yaw:.0f} | {drift} | {fs} | {after} |"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a string config override on every case (e.g. control.allocation_priority=clip)")
+    ap.add_argument("--motor-only", action="store_true", help="only the motor thrust-loss table")
+    args = ap.parse_args()
+    seeds = args.seeds
+    common = dict(kv.split("=", 1) for kv in args.set)
+    if args.motor_only:
+        _motor_table(seeds, common)
+        return
+    _all_tables(seeds, common)
+
+
+def _all_tables(seeds, common):
+    head = HEAD
+    imu_modes = (("stuck", 0.0), ("dead", 0.0), ("bias", 3000.0), ("noise", 50.0))
+
+    print(f"**IMU modules** (hover, smc-flc, robust_mean ensemble; seeds {seeds})\n\n{head}")
+    for n in (1, 2, 3):
+        for mode, mag in imu_modes:
+            ev = _events("imu", range(n), mode, mag)
+            print(f"| {n} x {mode} {mag:g} |", case("hover", "smc-flc", ev, seeds, common)[2:])
+    print(f"\n**IMU modules while moving** (harmonic attitude, smc-flc; seeds {seeds})\n\n{head}")
+    for mode, mag in imu_modes:
+        print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds, common)[2:])
+    print(f"\n**The same, plain mean ensemble** (the paper's)\n\n{head}")
+    for mode, mag in imu_modes:
+        print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds,
+                                               {**common, "estimation.ensemble": "mean"})[2:])
+
+    print(f"\n**Load cells** (hover, smc-flc; seeds {seeds})\n\n{head}")
+    for mode, mag in (("dead", 0.0), ("spike", 200.0), ("stuck", 0.0)):
+        print(f"| cell 2 {mode} {mag:g} |", case("hover", "smc-flc", _events("load_cell", [2], mode, mag), seeds, common)[2:])
+
+    _motor_table(seeds, common)
+
+
+def _motor_table(seeds, common):
+    print(f"\n**Motor 1 thrust loss** (hover; seeds {seeds}; {common or 'preset'})\n\n{HEAD}")
+    for strategy in ("smc-flc", "flc", "pid"):
+        for loss in (0.1, 0.2, 0.3, 0.5, 1.0):
+            ev = _events("motor", [1], "thrust_loss", loss)
+            print(f"| {strategy} {100 * loss:.0f} % |", case("hover", strategy, ev, seeds, common)[2:], flush=True)
+
+
+if __name__ == "__main__":
+    main()
