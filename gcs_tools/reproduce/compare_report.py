@@ -155,7 +155,7 @@ def render(sections, seed: int, quick: bool, columns, n_seeds: int, spec: str, s
     for q in compare.PAPER_CONTROLLERS:
         rows.append([q.upper(), f"built-in strategy `{q}`", "both", "none"])
     lines += [table(["controller", "what", "loops it flies", "loops kept from a built-in"], rows), ""]
-    from gcs_tools.reproduce.report import _settings_line
+    from gcs_tools.reproduce.settings_line import settings_line as _settings_line
 
     lines += [_settings_line(plants[0]).replace("the detailed sections below show", "the figures below show"), ""]
     if any(load_controller(p).replaces == "position" for p in plugins):

@@ -11,24 +11,12 @@ import json
 from pathlib import Path
 
 from gcs_tools.reproduce import paper_fit_section
+from gcs_tools.reproduce.settings_line import settings_line as _settings_line
 from gcs_tools.reproduce.experiment import NOT_REPRODUCED, NOT_RUN, PARTLY, REPRODUCED, Section, jsonable, table
 from protocol.atomic_file import atomic_write_text
 
 REPORT = "report.md"
 RESULTS = "results.json"
-
-
-def _settings_line(airframe: str = "hilms") -> str:
-    from rig_emulator.config.loader import load_config
-
-    cfg = load_config(airframe)
-    return (f"Emulator settings (the presets, unchanged) of the plant `{airframe}` the detailed sections below "
-            f"show: physics {cfg['sim.physics_rate_hz']:g} Hz, control "
-            f"{cfg['sim.control_rate_hz']:g} Hz, SMC gains of Eq. 41 read as `smc.gain_reading = "
-            f"\"{cfg['smc.gain_reading']}\"`, `smc.lambda_reading = \"{cfg['smc.lambda_reading']}\"` with "
-            f"`smc.switching = \"{cfg['smc.switching']}\"`, FLC of Tables 1, 3 and 5, controllers fed by the simulated sensors "
-            f"(`sensors.feedback = \"{cfg['sensors.feedback']}\"`), load-cell filter `{cfg['estimation.load_cell_filter']}`"
-            " unless an experiment says otherwise.")
 
 
 def _version() -> str:
