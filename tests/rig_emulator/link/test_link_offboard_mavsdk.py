@@ -59,6 +59,9 @@ def test_mavsdk_offboard_velocity_attitude_rate_param_and_metadata():
             telemetry.subscribe_battery(lambda b, _u: batteries.append(b))
 
             assert param.get_param_float("COM_OF_LOSS_T") == pytest.approx(1.0)
+            # MAVSDK streams its set-points by the wall clock (20 Hz): at 5x, a 0.2 s stall of a busy host
+            # is 1 s of the rig's time, PX4's default set-point timeout, and the loss's hold would stand
+            param.set_param_float("COM_OF_LOSS_T", 10.0)
             assert param.get_param_float("FENCE_RADIUS") == pytest.approx(100.0)
             # above the climb below: a breach would hold (AUTO.LOITER) until the next offboard.start(), as PX4 does
             param.set_param_float("FENCE_ALT_MAX", 60.0)
