@@ -82,12 +82,12 @@ class OffboardSetpoints:
         age = self.stream_age_s()
         if self.stored is None or age > STREAM_MAX_AGE_S:
             since = "no set-point received" if self.stored is None else f"last set-point {age:.1f} s ago"
-            return (f"OFFBOARD refused: no offboard signal ({since}); stream set-points at 2 Hz or more "
+            return (f"mode refused: OFFBOARD: no offboard signal ({since}); stream set-points at 2 Hz or more "
                     f"before switching")
         try:
             self._fly(self.stored)
         except ValueError as exc:
-            return f"OFFBOARD refused: {exc}"
+            return f"mode refused: OFFBOARD: {exc}"
         return True
 
     # --- outcome -------------------------------------------------------------------------------------
