@@ -138,7 +138,7 @@ def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
     n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"]))
                // int(round(cfg["sim.physics_rate_hz"] / cfg["sim.log_rate_hz"])))
     _series_writer(out, n_rows, cfg, start_unix_s)  # the checks: directory, free space
-    with compile_notice():
+    with compile_notice(cfg=cfg):
         sim = Simulation(cfg)
         sim.warm_up()
     result = sim.run()
@@ -159,7 +159,7 @@ def _simulate_streamed(args, cfg, out: Path | None, start_unix_s: float | None) 
     from rig_emulator.simulation.faults import failsafe_cause_text
     from rig_emulator.headless.streamed import StreamedRun
 
-    with compile_notice():
+    with compile_notice(cfg=cfg):
         run = StreamedRun(cfg)
         run.warm_up()
     n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"])) // run.sim.log_div)

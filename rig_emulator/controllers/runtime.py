@@ -84,6 +84,7 @@ class BoundPlugin:
         self.ctrl_div = ctrl_div  # the onboard loop's period the plug-in imposes (None: the config's)
         self.exc: BaseException | None = None  # what a Python plug-in raised
         self.exc_where = ""
+        self.observation = None  # a Python plug-in's Observation (PythonCall)
 
     @property
     def active(self) -> bool:
@@ -110,6 +111,8 @@ class BoundPlugin:
         """New rig constants (a parameter change of the running rig) into the observation."""
         if self.controller is not None:
             fill_rig_constants(self.params.obs, cp)
+            if self.observation is not None:
+                self.observation.refresh()
 
     def clear(self) -> None:
         """Forget a failure (on arming again)."""
@@ -226,19 +229,42 @@ class PythonCall(WrapperAddressProtocol):
         obs_array = bound.params.obs
         out = bound.params.out
         obs = Observation(obs_array, n_imu)
+        bound.observation = obs  # refreshed with the rig's constants (BoundPlugin.refresh_rig)
         update = controller.update
         reset = controller.reset
         unit = COMMANDS[controller.commands][1]
+        # per call: no allocation, no numpy scalars; memoryviews read and write Python floats
+        obs_mv = memoryview(obs_array)
+        out_mv = memoryview(out)
+        o_reset = PL.O_RESET
+        c0, c1, c2, c3 = range(PL.C_CMD, PL.C_CMD + 4)
+        command = Command
 
         def callback(t, _obs, _params, _state, _out):
             try:
-                if obs_array[PL.O_RESET] != 0.0:
+                if obs_mv[o_reset] != 0.0:
                     reset()
                 result = update(t, obs)
             except BaseException as exc:  # noqa: BLE001 - reported by the caller, KeyboardInterrupt re-raised there
                 bound.exc = exc
                 bound.exc_where = _where(exc)
                 return 1
+            if type(result) is tuple and len(result) == 4:  # the common answer, written without numpy
+                try:
+                    a, b, c, d = result
+                    out_mv[c0] = a
+                    out_mv[c1] = b
+                    out_mv[c2] = c
+                    out_mv[c3] = d
+                    return 0
+                except TypeError:
+                    pass  # not numbers: _store says what is wrong
+            elif type(result) is command:
+                try:
+                    _store_command(result, out_mv)
+                    return 0
+                except (TypeError, ValueError):
+                    pass
             try:
                 _store(result, out, unit)
             except (TypeError, ValueError) as exc:  # what update returned is wrong: point at update, not here
@@ -272,6 +298,17 @@ def _returned_by(update) -> str:
     if code is None:
         return ""
     return f" (returned by {getattr(fn, '__qualname__', code.co_name)}, {code.co_filename}:{code.co_firstlineno})"
+
+
+def _store_command(result, out_mv) -> None:
+    """A :class:`Command` of four numbers and three-number attitudes into ``out`` without numpy;
+    TypeError or ValueError when it is not that (then :func:`_store` says what is wrong)."""
+    values, att, rate = result
+    out_mv[PL.C_CMD], out_mv[PL.C_CMD + 1], out_mv[PL.C_CMD + 2], out_mv[PL.C_CMD + 3] = values
+    if att is not None:
+        out_mv[PL.C_ATT_DES], out_mv[PL.C_ATT_DES + 1], out_mv[PL.C_ATT_DES + 2] = att
+    if rate is not None:
+        out_mv[PL.C_ATT_RATE_DES], out_mv[PL.C_ATT_RATE_DES + 1], out_mv[PL.C_ATT_RATE_DES + 2] = rate
 
 
 def _store(result, out: np.ndarray, unit: str) -> None:
