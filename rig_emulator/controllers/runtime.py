@@ -4,7 +4,7 @@
 instance) into a :class:`~rig_emulator.controllers.base.Controller`; :func:`bind` checks
 its declaration against the rig's rates and builds what the compiled loop takes: a
 :class:`~rig_emulator.control.plugin_step.PluginParams` and a function pointer, a
-``numba.cfunc`` for a :class:`CompiledController`, a ctypes callback into Python otherwise.
+``numba.cfunc`` for a :class:`CompiledController`, a C callback into Python otherwise.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from __future__ import annotations
 import ctypes
 import importlib
 import math
+import os
 import traceback
 
 import numba
@@ -217,10 +218,31 @@ _CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, c
                              ctypes.c_void_p)
 
 
-class PythonCall(WrapperAddressProtocol):
-    """A Python controller as the loop's function pointer (a ctypes callback).
+def _c_callback(fn):
+    """``fn`` as a C function of the plug-in signature: (the object to keep alive, its address).
 
-    The callback never lets an exception out (ctypes would print and return garbage): it
+    cffi's callbacks enter Python faster than ctypes' (``python -m benchmarks --only plugins``;
+    docs/explanation/controller-speed.md); cffi is used when installed, ctypes otherwise or with
+    ``HILMS_PLUGIN_CALLBACK=ctypes``. Both call ``fn`` alike: a run gives the same results."""
+    if _FFI is not None and os.environ.get("HILMS_PLUGIN_CALLBACK") != "ctypes":
+        cb = _FFI.callback("int64_t(double, void *, void *, void *, void *)", fn)
+        return cb, int(_FFI.cast("uintptr_t", cb))
+    cb = _CALLBACK(fn)
+    return cb, ctypes.cast(cb, ctypes.c_void_p).value
+
+
+try:
+    import cffi
+
+    _FFI = cffi.FFI()
+except ImportError:  # optional: ctypes does the same, a little slower
+    _FFI = None
+
+
+class PythonCall(WrapperAddressProtocol):
+    """A Python controller as the loop's function pointer (a cffi or ctypes callback).
+
+    The callback never lets an exception out (the C caller would print it and go on): it
     stores it on the binding and returns 1; the loop then disarms and the caller reports.
     """
 
@@ -238,6 +260,8 @@ class PythonCall(WrapperAddressProtocol):
         out_mv = memoryview(out)
         o_reset = PL.O_RESET
         c0, c1, c2, c3 = range(PL.C_CMD, PL.C_CMD + 4)
+        a0, a1, a2 = range(PL.C_ATT_DES, PL.C_ATT_DES + 3)
+        r0, r1, r2 = range(PL.C_ATT_RATE_DES, PL.C_ATT_RATE_DES + 3)
         command = Command
 
         def callback(t, _obs, _params, _state, _out):
@@ -257,24 +281,28 @@ class PythonCall(WrapperAddressProtocol):
                     out_mv[c2] = c
                     out_mv[c3] = d
                     return 0
-                except TypeError:
-                    pass  # not numbers: _store says what is wrong
+                except Exception:  # noqa: BLE001 - not numbers: _store says what is wrong
+                    pass
             elif type(result) is command:
                 try:
-                    _store_command(result, out_mv)
+                    values, att, rate = result
+                    out_mv[c0], out_mv[c1], out_mv[c2], out_mv[c3] = values
+                    if att is not None:
+                        out_mv[a0], out_mv[a1], out_mv[a2] = att
+                    if rate is not None:
+                        out_mv[r0], out_mv[r1], out_mv[r2] = rate
                     return 0
-                except (TypeError, ValueError):
+                except Exception:  # noqa: BLE001 - _store says what is wrong
                     pass
             try:
                 _store(result, out, unit)
-            except (TypeError, ValueError) as exc:  # what update returned is wrong: point at update, not here
+            except Exception as exc:  # noqa: BLE001 - what update returned is wrong: point at update, not here
                 bound.exc = exc
                 bound.exc_where = _returned_by(update)
                 return 1
             return 0
 
-        self._callback = _CALLBACK(callback)
-        self._address = ctypes.cast(self._callback, ctypes.c_void_p).value
+        self._callback, self._address = _c_callback(callback)
 
     def __wrapper_address__(self):
         return self._address
@@ -298,17 +326,6 @@ def _returned_by(update) -> str:
     if code is None:
         return ""
     return f" (returned by {getattr(fn, '__qualname__', code.co_name)}, {code.co_filename}:{code.co_firstlineno})"
-
-
-def _store_command(result, out_mv) -> None:
-    """A :class:`Command` of four numbers and three-number attitudes into ``out`` without numpy;
-    TypeError or ValueError when it is not that (then :func:`_store` says what is wrong)."""
-    values, att, rate = result
-    out_mv[PL.C_CMD], out_mv[PL.C_CMD + 1], out_mv[PL.C_CMD + 2], out_mv[PL.C_CMD + 3] = values
-    if att is not None:
-        out_mv[PL.C_ATT_DES], out_mv[PL.C_ATT_DES + 1], out_mv[PL.C_ATT_DES + 2] = att
-    if rate is not None:
-        out_mv[PL.C_ATT_RATE_DES], out_mv[PL.C_ATT_RATE_DES + 1], out_mv[PL.C_ATT_RATE_DES + 2] = rate
 
 
 def _store(result, out: np.ndarray, unit: str) -> None:

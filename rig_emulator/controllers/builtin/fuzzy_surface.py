@@ -12,14 +12,14 @@ Reading: "least squares over a uniform grid of the rectangle ``|e| <= e_max``,
 ``|de| <= de_max``" is the fit adopted here.
 
 Python-side analysis code (numpy); the surface itself is evaluated by the compiled
-:func:`rig_emulator.control.fuzzy.flc_eval_many`.
+:func:`rig_emulator.controllers.builtin.fuzzy.flc_eval_many`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from rig_emulator.control.fuzzy import RULE_TABLE, FuzzyAxis, flc_eval_many
+from rig_emulator.controllers.builtin.fuzzy import RULE_TABLE, FuzzyAxis, flc_eval_many
 
 
 def control_surface(

@@ -56,3 +56,19 @@ def test_a_served_parameter_change_reaches_the_running_controller():
     rig = LiveRig(load_config(scenario="hover"), controller=Gains())
     rig.set_params({"controller.params": {"kz": value, "k": [value, -value]}})
     assert rig.controller.params.kz == value and list(rig.controller.params.k) == [value, -value]
+
+
+def test_cffi_and_ctypes_callbacks_fly_alike(monkeypatch):
+    from rig_emulator.api import simulate
+    from rig_emulator.controllers import runtime
+
+    spec = "rig_emulator.controllers.examples.cascaded_pid:CascadedPID"
+    seed = int(np.random.default_rng().integers(0, 1000))
+    runs = []
+    for how in ("cffi", "ctypes"):
+        monkeypatch.setenv("HILMS_PLUGIN_CALLBACK", how)
+        if how == "cffi" and runtime._FFI is None:
+            pytest.skip("cffi is not installed")
+        runs.append(simulate("helix", duration=1.0, seed=seed, controller=spec).series)
+    for key in runs[0]:
+        assert np.array_equal(runs[0][key], runs[1][key], equal_nan=True), key

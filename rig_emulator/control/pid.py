@@ -1,0 +1,8 @@
+"""Moved to :mod:`rig_emulator.controllers.builtin.pid` (the built-in laws live beside the
+controller interface and its examples); this name stays importable: it is that very module."""
+
+import sys
+
+from rig_emulator.controllers.builtin import pid as _module
+
+sys.modules[__name__] = _module
