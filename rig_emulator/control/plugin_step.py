@@ -1,4 +1,4 @@
-"""A controller plug-in's turn in the step loop (docs/YOUR_CONTROLLER.md).
+"""A controller plug-in's turn in the step loop (docs/how-to/your-controller.md).
 
 The loop calls :func:`plugin_control` instead of
 :func:`~rig_emulator.control.controller.control_update` when a plug-in is loaded. It fills

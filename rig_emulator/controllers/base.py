@@ -1,4 +1,4 @@
-"""The controller plug-in interface: what a user subclasses (docs/YOUR_CONTROLLER.md).
+"""The controller plug-in interface: what a user subclasses (docs/how-to/your-controller.md).
 
 Modelled on RotorPy's controller template (an object with ``update(t, state, flat_output)``
 returning motor speeds, thrust plus attitude or body rates), on this rig's terms: the
