@@ -110,7 +110,7 @@ def grid_inputs(e_terms: np.ndarray, de_terms: np.ndarray, g: int):
 
 
 def _axis():
-    from rig_emulator.control.fuzzy import RULE_TABLE, make_axis
+    from rig_emulator.controllers.builtin.fuzzy import RULE_TABLE, make_axis
 
     return make_axis(*AXIS_D1), RULE_TABLE
 
@@ -130,7 +130,7 @@ def build_skfuzzy(axis, rule_table):
             f"scikit-fuzzy is not importable ({exc}); install the bench extra "
             f"(`pip install -e '.[bench]'`: scikit-fuzzy==0.5.0, networkx)"
         ) from None
-    from rig_emulator.control.fuzzy import INPUT_TERMS, OUTPUT_TERMS
+    from rig_emulator.controllers.builtin.fuzzy import INPUT_TERMS, OUTPUT_TERMS
 
     e = ctrl.Antecedent(input_universe(axis.e_terms), "e")
     de = ctrl.Antecedent(input_universe(axis.de_terms), "de")
@@ -170,7 +170,7 @@ def skfuzzy_compute(grid: int) -> dict:
         theirs[k] = sim.output["u"]
     wall = time.perf_counter() - t0
 
-    from rig_emulator.control.fuzzy import flc_eval_many
+    from rig_emulator.controllers.builtin.fuzzy import flc_eval_many
 
     ours = np.empty(len(e))
     flc_eval_many(e, de, axis.e_terms, axis.de_terms, axis.out_centers, rule_table, ours)
@@ -186,7 +186,7 @@ def skfuzzy_compute(grid: int) -> dict:
 def flc_compute(n: int, n_python: int, batches: int) -> dict:
     """Our FLC per evaluation in the compiled loop (batch / n) and per call from Python."""
     t0 = time.perf_counter()
-    from rig_emulator.control.fuzzy import flc_eval, flc_eval_many
+    from rig_emulator.controllers.builtin.fuzzy import flc_eval, flc_eval_many
 
     axis, rule_table = _axis()
     import_s = time.perf_counter() - t0

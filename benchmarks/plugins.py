@@ -10,7 +10,10 @@ with the full sensing chain, 1 kHz physics, 500 Hz control):
 * ``plugin-python-pid`` - the same kernel run as plain Python from the loop
   (``controller.call = "python"``);
 * ``plugin-python-trivial`` - a trivial plain-Python controller (hover thrust, no torque;
-  hover scenario) called at 500 Hz from the compiled loop (target >= 50x real time).
+  hover scenario) called at 500 Hz from the compiled loop (target >= 50x real time);
+* ``plugin-python-cascaded`` - a 30-line cascaded PID written in plain Python as a user writes
+  one (rig_emulator/controllers/examples/cascaded_pid.py: ``self.params.<name>``, ``obs.<name>``,
+  Python floats and lists) at 500 Hz on the helix (target >= 150x real time).
 
 Figures: the steady-state real-time factor of each (median of ``inner`` calls after the first),
 each plug-in's speed as a share of the built-in's in the same repetition, and the first call
@@ -33,6 +36,7 @@ PROBES = {
     "plugin-compiled-pid": ("helix", "rig_emulator.controllers.examples.pid:PID", "compiled"),
     "plugin-python-pid": ("helix", "rig_emulator.controllers.examples.pid:PID", "python"),
     "plugin-python-trivial": ("hover", "benchmarks.plugins:TrivialHover", "python"),
+    "plugin-python-cascaded": ("helix", "rig_emulator.controllers.examples.cascaded_pid:CascadedPID", "python"),
 }
 
 
@@ -82,6 +86,7 @@ for _name, (_scenario, _ctrl, _call) in PROBES.items():
 
 PYTHON_TARGET = (Target(">=", 50.0, "issue 16"),)
 COMPILED_TARGET = (Target(">=", 300.0, "issue 16"),)
+CASCADED_TARGET = (Target(">=", 150.0, "plain-Python cascaded PID"),)
 
 
 @benchmark("plugins", probes=tuple(PROBES), description="controller plug-ins, compiled and Python, vs the built-in")
@@ -98,6 +103,10 @@ def plugins(stats: dict[str, ProbeStats]) -> list[Metric]:
     triv = stats["plugin-python-trivial"]
     out.append(triv.metric("rtf", "trivial Python controller at 500 Hz, hover: real-time factor", "x real time",
                            targets=PYTHON_TARGET))
+    cas = stats["plugin-python-cascaded"]
+    out.append(cas.metric("rtf", "30-line cascaded PID in plain Python at 500 Hz, helix: real-time factor",
+                          "x real time", targets=CASCADED_TARGET))
+    out.append(paired_ratio_metric(cas, "rtf", ref, "rtf", "Python cascaded PID speed / built-in speed"))
     for name in PROBES:
         s = stats[name]
         out.append(Metric(f"{name}: first call, cold numba cache", s.first("first_call_s"), "s",

@@ -54,6 +54,7 @@ COMPILED_ROOTS = (
     "rig_emulator/_jit.py",
     "rig_emulator/physics",
     "rig_emulator/control",
+    "rig_emulator/controllers/builtin",  # the built-in laws (the rest of controllers/ is plain Python)
     "rig_emulator/guidance",
     "rig_emulator/simulation",
     "rig_emulator/sensors",

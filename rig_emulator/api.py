@@ -27,7 +27,7 @@ def simulate(
 
     ``controller``: a controller plug-in flying instead of (part of) the strategy: an instance
     or class of :class:`rig_emulator.controllers.Controller`, or ``"package.module:Name"``
-    (docs/YOUR_CONTROLLER.md). A plug-in that fails raises
+    (docs/how-to/your-controller.md). A plug-in that fails raises
     :class:`~rig_emulator.controllers.PluginError` naming it, the time and the problem.
 
     ``overrides`` are dotted parameter keys with dots written as double underscores

@@ -2,7 +2,7 @@
 
 * ``rig-emulator simulate --scenario NAME --strategy NAME --duration S --seed N [--out FILE]``
   runs a scenario headless, as fast as the machine allows, and prints Table 6's mean errors;
-  ``--controller package.module:Name`` flies a controller plug-in (docs/YOUR_CONTROLLER.md).
+  ``--controller package.module:Name`` flies a controller plug-in (docs/how-to/your-controller.md).
 * ``rig-emulator params [--scenario NAME] [--controller MODULE:NAME]`` lists every parameter with its value, unit and
   range, a controller plug-in's own ones (``controller.params.NAME``) with their defaults.
 * ``rig-emulator scenarios`` lists the scenario and airframe presets.
@@ -142,7 +142,7 @@ def _simulate_to_tlog(args, cfg, out: Path, start_unix_s: float | None) -> int:
     n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"]))
                // int(round(cfg["sim.physics_rate_hz"] / cfg["sim.log_rate_hz"])))
     _series_writer(out, n_rows, cfg, start_unix_s)  # the checks: directory, free space
-    with compile_notice():
+    with compile_notice(cfg=cfg):
         sim = Simulation(cfg)
         sim.warm_up()
     result = sim.run()
@@ -163,7 +163,7 @@ def _simulate_streamed(args, cfg, out: Path | None, start_unix_s: float | None) 
     from rig_emulator.simulation.faults import failsafe_cause_text
     from rig_emulator.headless.streamed import StreamedRun
 
-    with compile_notice():
+    with compile_notice(cfg=cfg):
         run = StreamedRun(cfg)
         run.warm_up()
     n_rows = -(-int(round(cfg["sim.duration"] * cfg["sim.physics_rate_hz"])) // run.sim.log_div)
@@ -424,7 +424,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="controller strategy (default: the configuration's control.strategy, smc-flc)")
     p.add_argument("--controller", metavar="MODULE:NAME",
                    help="fly a controller plug-in instead of (part of) the strategy; its parameters are served "
-                        "under its prefix; a failing plug-in trips the failsafe (docs/YOUR_CONTROLLER.md)")
+                        "under its prefix; a failing plug-in trips the failsafe (docs/how-to/your-controller.md)")
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser("simulate", help="run a scenario headless and print the mean errors")
@@ -434,7 +434,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--omega", type=float, help="harmonic frequency in rad/s (Eq. 44)")
     p.add_argument("--controller", metavar="MODULE:NAME",
-                   help="fly a controller plug-in instead of (part of) the strategy (docs/YOUR_CONTROLLER.md)")
+                   help="fly a controller plug-in instead of (part of) the strategy (docs/how-to/your-controller.md)")
     p.add_argument("--out", help="write the time series (.npz, .csv, or .tlog: the MAVLink messages the live rig streams); "
                                  ".npz and .csv are streamed as the run goes (memory does not grow with --duration)")
     p.add_argument("--start-time", metavar="WHEN",

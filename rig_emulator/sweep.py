@@ -101,7 +101,7 @@ class SimJob:
     of (key, value) pairs sorted by key; ``columns`` names the logged series to return
     (None: all, ``()``: none); ``label`` is free text for the caller (it does not affect
     the run); ``controller`` names a controller plug-in (``"package.module:Name"``, imported
-    by the worker that runs the job; docs/YOUR_CONTROLLER.md).
+    by the worker that runs the job; docs/how-to/your-controller.md).
     """
 
     scenario: str

@@ -2,7 +2,7 @@
 
 Per attitude axis the FLC surface ``u(e, de)`` the rig flies is sampled over a rectangle
 and a plane through the origin ``u_est = kp e + kd de`` is fitted by least squares
-(:func:`rig_emulator.control.fuzzy_surface.fit_plane`). SI throughout: e in rad, de in
+(:func:`rig_emulator.controllers.builtin.fuzzy_surface.fit_plane`). SI throughout: e in rad, de in
 rad/s, u in N m, so kp is in N m/rad and kd in N m s/rad.
 
 Reading (the paper gives no fit range): the rectangle is ``|e| <= scale e_sat``,
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rig_emulator.control.fuzzy import TERM_CENTER, TERM_RIGHT_HALF_WIDTH, TERM_SHOULDER, FuzzyAxis
-from rig_emulator.control.fuzzy_surface import control_surface, fit_plane, plane_residual
+from rig_emulator.controllers.builtin.fuzzy import TERM_CENTER, TERM_RIGHT_HALF_WIDTH, TERM_SHOULDER, FuzzyAxis
+from rig_emulator.controllers.builtin.fuzzy_surface import control_surface, fit_plane, plane_residual
 
 AXES = ("phi", "theta", "psi")
 

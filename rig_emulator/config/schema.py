@@ -155,7 +155,7 @@ SCHEMA: dict[str, Spec] = {
     # --- control ---------------------------------------------------------------------------
     "control.strategy": S("controller strategy", STRATEGIES),
     "controller.plugin": Spec("str", "controller plug-in 'package.module:Name' flying instead of (part of) the strategy "
-                                     "(docs/YOUR_CONTROLLER.md); empty: the built-in strategy alone",
+                                     "(docs/how-to/your-controller.md); empty: the built-in strategy alone",
                              values="'package.module:Name', or empty"),
     "controller.params": Spec("params", "the plug-in's own parameters (name = number or list of numbers) over its defaults; "
                                        "one at a time: --set controller.params.NAME=VALUE; listed below with "

@@ -21,11 +21,11 @@ import numpy as np
 
 from rig_emulator._jit import jit
 from rig_emulator.control.allocation import allocate, euler_torque_to_body
-from rig_emulator.control.fuzzy import flc_axis
-from rig_emulator.control.pid import pid_axis
+from rig_emulator.controllers.builtin.fuzzy import flc_axis
+from rig_emulator.controllers.builtin.pid import pid_axis
 from rig_emulator.control.reference_filter import reference_step, wrap_angle
-from rig_emulator.control.smc import smc_attitude, switch
-from rig_emulator.control.strategies import FLC, SMC
+from rig_emulator.controllers.builtin.smc import smc_attitude, switch
+from rig_emulator.controllers.builtin.strategies import FLC, SMC
 from rig_emulator.control.thrust_direction import collective_thrust, desired_tilt
 from rig_emulator.physics.motors import rotor_speed, voltage_for_thrust
 from rig_emulator.physics.rotation import euler_rates_from_body_rates
@@ -97,6 +97,16 @@ def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz
     :func:`actuate` (allocation and Eq. 40 inverse).
     """
     u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout)
+    return attitude_to_motors(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, u1, r0, dr0, a0, r1, dr1, a1,
+                              r2, dr2, a2, flags, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3)
+
+
+@jit(inline="always")  # see the note above control_update
+def attitude_to_motors(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
+                       flags, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
+    """Everything after the attitude reference: the attitude law (:func:`attitude_stage`), its
+    Euler-frame torques turned to body torques, then :func:`actuate`. The one implementation of
+    that tail, for the built-in strategies and for a position-only plug-in alike. Returns the flags."""
     attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
                    cp, cstate, e3, de3, acc3, s3, tau3)
     u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])

@@ -1,6 +1,6 @@
 """The numbers a controller plug-in exchanges with the step loop: one flat float64 array each way.
 
-The layout is part of the public plug-in interface (docs/YOUR_CONTROLLER.md); names are
+The layout is part of the public plug-in interface (docs/how-to/your-controller.md); names are
 stable. A compiled plug-in indexes ``obs`` and ``out`` with these constants; a Python
 plug-in reads the same numbers through named views (:class:`rig_emulator.controllers.Observation`).
 

@@ -1,4 +1,4 @@
-"""A controller plug-in's turn in the step loop (docs/YOUR_CONTROLLER.md).
+"""A controller plug-in's turn in the step loop (docs/how-to/your-controller.md).
 
 The loop calls :func:`plugin_control` instead of
 :func:`~rig_emulator.control.controller.control_update` when a plug-in is loaded. It fills
@@ -19,7 +19,6 @@ from collections import namedtuple
 from numba import types
 
 from rig_emulator._jit import jit
-from rig_emulator.control.allocation import euler_torque_to_body
 from rig_emulator.control.controller import (
     record_decision,
     CS_STARTED,
@@ -30,7 +29,7 @@ from rig_emulator.control.controller import (
     REF_MODE,
     REF_THRUST,
     actuate,
-    attitude_stage,
+    attitude_to_motors,
     position_stage,
     shape_attitude,
 )
@@ -113,10 +112,8 @@ def plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, d
             cout[OUT_UXY] = math.nan
             cout[OUT_UXY + 1] = math.nan
             cstate[CS_STARTED] = 1.0
-        attitude_stage(ctrl_dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
-                       cp, cstate, scratch[0], scratch[1], scratch[2], s3, tau3)
-        u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
-        actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd)
+        attitude_to_motors(ctrl_dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, u1, r0, dr0, a0, r1, dr1, a1,
+                           r2, dr2, a2, flags, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], s3, tau3)
         return True
 
     if pl.mode == P_ATTITUDE:

@@ -1,4 +1,4 @@
-"""Your controller on the rig: in-process controller plug-ins (docs/YOUR_CONTROLLER.md).
+"""Your controller on the rig: in-process controller plug-ins (docs/how-to/your-controller.md).
 
 >>> from rig_emulator.controllers import Controller
 >>> class Hover(Controller):
@@ -8,6 +8,9 @@
 
 Run it: ``rig-emulator simulate --scenario hover --controller my_module:Hover``, or
 ``rig_emulator.api.simulate("hover", controller=Hover())``.
+
+The package holds the interface (this module, :mod:`.base`, :mod:`.observation`, :mod:`.runtime`),
+the built-in strategies' laws (:mod:`.builtin`) and the examples (:mod:`.examples`).
 
 The base classes import without numba; the loader and the observation views (which need the
 compiled side) are imported on first use.

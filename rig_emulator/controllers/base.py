@@ -1,4 +1,4 @@
-"""The controller plug-in interface: what a user subclasses (docs/YOUR_CONTROLLER.md).
+"""The controller plug-in interface: what a user subclasses (docs/how-to/your-controller.md).
 
 Modelled on RotorPy's controller template (an object with ``update(t, state, flat_output)``
 returning motor speeds, thrust plus attitude or body rates), on this rig's terms: the
@@ -70,8 +70,13 @@ class ControllerParams:
     """A controller's own parameters: named floats or fixed-length float vectors in one flat
     float64 array (``array``, what a compiled kernel receives as ``params``).
 
-    ``params.kp`` reads the current value (a float, or a read-only view for vectors); a
-    served rig changes the array in place when a ground station sets ``<prefix><NAME><i>``.
+    ``params.kp`` is a plain attribute: a float, or a read-only view of the array for a
+    vector, resolved when a value changes, not at every read (a read costs what an attribute
+    costs; a plain-Python controller reads them at every step). Every change goes through
+    :meth:`set` (the config, ``--set``, :meth:`LiveRig.set_params`, PARAM_SET), which
+    refreshes them; code that writes :attr:`array` in place calls :meth:`refresh` afterwards.
+    A parameter whose name is one of this class's own attributes (``set``, ``array``, ...)
+    is read with ``params.get(name)``.
     """
 
     def __init__(self, defaults: dict, values: dict | None = None, owner: str = "controller",
@@ -88,8 +93,37 @@ class ControllerParams:
         self._scalar = {n: np.ndim(d) == 0 for n, d in defaults.items()}
         self.array = np.ascontiguousarray(flat if flat else [0.0], dtype=np.float64)
         self.owner = owner
+        # the names read as attributes: not those of this class's own methods and fields
+        self._plain = tuple(n for n in self._slices if not hasattr(type(self), n) and n not in self.__dict__)
+        self._bind()
         for name, value in (values or {}).items():
             self.set(name, value)
+
+    def _bind(self) -> None:
+        for name in self._plain:
+            if not self._scalar[name]:
+                view = self.array[self._slices[name]]
+                view.flags.writeable = False
+                self.__dict__[name] = view  # a view: follows the array whatever writes it
+        self.refresh()
+
+    def __getstate__(self):  # the views are rebuilt on the unpickled array
+        state = dict(self.__dict__)
+        for name in self._plain:
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state) -> None:
+        self.__dict__.update(state)
+        self._bind()
+
+    def refresh(self) -> None:
+        """Resolve the scalar attributes from :attr:`array` again (after writing it in place)."""
+        a = self.array
+        d = self.__dict__
+        for name in self._plain:
+            if self._scalar[name]:
+                d[name] = float(a[self._slices[name].start])
 
     def names(self):
         return tuple(self._slices)
@@ -97,6 +131,15 @@ class ControllerParams:
     def index(self, name: str) -> slice:
         """Where parameter ``name`` lives in :attr:`array` (for compiled kernels)."""
         return self._slices[name]
+
+    def get(self, name: str):
+        """The current value of ``name``: a float, or a read-only view for a vector."""
+        sl = self._slices[name]
+        if self._scalar[name]:
+            return float(self.array[sl.start])
+        view = self.array[sl]
+        view.flags.writeable = False
+        return view
 
     def set(self, name: str, value) -> None:
         """Set one parameter (a number, or as many numbers as its default has); validated. The
@@ -130,21 +173,18 @@ class ControllerParams:
         if np.any(v < lo) or np.any(v > hi):
             raise PluginError(self.owner, f"{key} = {value!r}: must be {rng}")
         self.array[sl] = v
+        if self._scalar[name] and name in self._plain:
+            self.__dict__[name] = float(self.array[sl.start])
 
     def limits(self, name: str) -> tuple[float, float]:
         """(min, max) of parameter ``name`` from the controller's ``param_info`` (+-inf when not given)."""
         info = self.info.get(name, {})
         return float(info.get("min", -math.inf)), float(info.get("max", math.inf))
 
-    def __getattr__(self, name):
+    def __getattr__(self, name):  # only reached for names that are not plain attributes
         slices = self.__dict__.get("_slices", {})
         if name in slices:
-            sl = slices[name]
-            if self._scalar[name]:
-                return float(self.array[sl.start])
-            view = self.array[sl]
-            view.flags.writeable = False
-            return view
+            return self.get(name)
         raise AttributeError(name)
 
     def as_dict(self) -> dict:

@@ -27,6 +27,7 @@ class Reference:
     def __init__(self, a: np.ndarray):
         r = a[PL.O_REF:]
         self._a = a
+        self._mv = memoryview(a)  # indexing it gives Python floats, faster than numpy scalars
         self.position = r[REF_POS:REF_POS + 3]
         self.velocity = r[REF_VEL:REF_VEL + 3]
         self.acceleration = r[REF_ACC:REF_ACC + 3]
@@ -38,19 +39,19 @@ class Reference:
     @property
     def yaw(self) -> float:
         """Desired yaw psi (rad), position mode."""
-        return float(self._a[self._yaw])
+        return self._mv[self._yaw]
 
     @property
     def thrust(self) -> float:
         """Collective thrust u1 (N) of an offboard attitude or body-rate set-point; NaN when none
         was given (hover thrust m g meant) and in position mode."""
-        return float(self._a[PL.O_REF_THRUST])
+        return self._mv[PL.O_REF_THRUST]
 
     @property
     def body_rates(self) -> bool:
         """True for an offboard body-rate set-point: ``attitude_rate`` then holds body rates
         (FRD, rad/s) and ``attitude`` is not controlled."""
-        return self._a[PL.O_MODE] == 2.0
+        return self._mv[PL.O_MODE] == 2.0
 
 
 class Observation:
@@ -67,11 +68,16 @@ class Observation:
     constants ``mass``, ``gravity``, ``inertia`` (3), ``arm_length``, ``km_over_kf``, ``kf``,
     ``thrust_per_volt``, ``voltage_max``, ``thrust_max``, ``max_tilt``, ``ref_omega``;
     ``array`` the whole flat array.
+
+    The rig's constants are plain attributes (read from the array when the observation is
+    built and again by :meth:`refresh` when the rig's parameters change); the per-step
+    numbers are read from the array at each access.
     """
 
     def __init__(self, array: np.ndarray, n_imu: int = 5):
         a = array
         self.array = a
+        self._mv = memoryview(a)
         self.euler = a[PL.O_EULER:PL.O_EULER + 3]
         self.euler_rates = a[PL.O_EULER_RATE:PL.O_EULER_RATE + 3]
         self.body_rates = a[PL.O_BODY_RATE:PL.O_BODY_RATE + 3]
@@ -96,23 +102,23 @@ class Observation:
         for k, v in vars(self.reference).items():
             if isinstance(v, np.ndarray) and k != "_a":  # the views only: the loop writes the array itself
                 v.flags.writeable = False
+        self.refresh()
 
-    def _f(self, i: int) -> float:
-        return float(self.array[i])
+    def refresh(self) -> None:
+        """Read the rig's constants from the array again (after a parameter change of the rig)."""
+        for name, i in _CONSTANTS.items():
+            self.__dict__[name] = float(self.array[i])
 
-    t = property(lambda self: self._f(PL.O_T), doc="time (s)")
-    dt = property(lambda self: self._f(PL.O_DT), doc="the controller's period (s)")
-    reset = property(lambda self: self.array[PL.O_RESET] != 0.0, doc="first call after arming")
-    attitude_mode = property(lambda self: self.array[PL.O_MODE] != 0.0, doc="guidance gives attitude references")
-    thrust_target = property(lambda self: self._f(PL.O_THRUST_TARGET), doc="u1 from the rig's position loop (N)")
-    has_truth = property(lambda self: self.array[PL.O_TRUE_VALID] != 0.0, doc="true state present (ideal feedback)")
-    mass = property(lambda self: self._f(PL.O_MASS))
-    gravity = property(lambda self: self._f(PL.O_G))
-    arm_length = property(lambda self: self._f(PL.O_ARM))
-    km_over_kf = property(lambda self: self._f(PL.O_KM_KF))
-    kf = property(lambda self: self._f(PL.O_KF))
-    thrust_per_volt = property(lambda self: self._f(PL.O_K_V), doc="N per V (Eq. 40)")
-    voltage_max = property(lambda self: self._f(PL.O_V_MAX))
-    thrust_max = property(lambda self: self._f(PL.O_F_MAX), doc="per motor (N)")
-    max_tilt = property(lambda self: self._f(PL.O_MAX_TILT), doc="control.max_tilt_deg in rad")
-    ref_omega = property(lambda self: self._f(PL.O_REF_OMEGA), doc="reference-filter bandwidth 1/tau (rad/s)")
+    t = property(lambda self: self._mv[PL.O_T], doc="time (s)")
+    dt = property(lambda self: self._mv[PL.O_DT], doc="the controller's period (s)")
+    reset = property(lambda self: self._mv[PL.O_RESET] != 0.0, doc="first call after arming")
+    attitude_mode = property(lambda self: self._mv[PL.O_MODE] != 0.0, doc="guidance gives attitude references")
+    thrust_target = property(lambda self: self._mv[PL.O_THRUST_TARGET], doc="u1 from the rig's position loop (N)")
+    has_truth = property(lambda self: self._mv[PL.O_TRUE_VALID] != 0.0, doc="true state present (ideal feedback)")
+
+
+#: the rig's constants: attribute -> index (thrust_per_volt: N per V, Eq. 40; thrust_max per motor, N;
+#: max_tilt: control.max_tilt_deg in rad; ref_omega: the reference filter's bandwidth 1/tau, rad/s)
+_CONSTANTS = {"mass": PL.O_MASS, "gravity": PL.O_G, "arm_length": PL.O_ARM, "km_over_kf": PL.O_KM_KF, "kf": PL.O_KF,
+              "thrust_per_volt": PL.O_K_V, "voltage_max": PL.O_V_MAX, "thrust_max": PL.O_F_MAX,
+              "max_tilt": PL.O_MAX_TILT, "ref_omega": PL.O_REF_OMEGA}

@@ -4,7 +4,7 @@
 instance) into a :class:`~rig_emulator.controllers.base.Controller`; :func:`bind` checks
 its declaration against the rig's rates and builds what the compiled loop takes: a
 :class:`~rig_emulator.control.plugin_step.PluginParams` and a function pointer, a
-``numba.cfunc`` for a :class:`CompiledController`, a ctypes callback into Python otherwise.
+``numba.cfunc`` for a :class:`CompiledController`, a C callback into Python otherwise.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from __future__ import annotations
 import ctypes
 import importlib
 import math
+import os
 import traceback
 
 import numba
@@ -84,6 +85,7 @@ class BoundPlugin:
         self.ctrl_div = ctrl_div  # the onboard loop's period the plug-in imposes (None: the config's)
         self.exc: BaseException | None = None  # what a Python plug-in raised
         self.exc_where = ""
+        self.observation = None  # a Python plug-in's Observation (PythonCall)
 
     @property
     def active(self) -> bool:
@@ -110,6 +112,8 @@ class BoundPlugin:
         """New rig constants (a parameter change of the running rig) into the observation."""
         if self.controller is not None:
             fill_rig_constants(self.params.obs, cp)
+            if self.observation is not None:
+                self.observation.refresh()
 
     def clear(self) -> None:
         """Forget a failure (on arming again)."""
@@ -214,10 +218,31 @@ _CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, c
                              ctypes.c_void_p)
 
 
-class PythonCall(WrapperAddressProtocol):
-    """A Python controller as the loop's function pointer (a ctypes callback).
+def _c_callback(fn):
+    """``fn`` as a C function of the plug-in signature: (the object to keep alive, its address).
 
-    The callback never lets an exception out (ctypes would print and return garbage): it
+    cffi's callbacks enter Python faster than ctypes' (``python -m benchmarks --only plugins``;
+    docs/explanation/controller-speed.md); cffi is used when installed, ctypes otherwise or with
+    ``HILMS_PLUGIN_CALLBACK=ctypes``. Both call ``fn`` alike: a run gives the same results."""
+    if _FFI is not None and os.environ.get("HILMS_PLUGIN_CALLBACK") != "ctypes":
+        cb = _FFI.callback("int64_t(double, void *, void *, void *, void *)", fn)
+        return cb, int(_FFI.cast("uintptr_t", cb))
+    cb = _CALLBACK(fn)
+    return cb, ctypes.cast(cb, ctypes.c_void_p).value
+
+
+try:
+    import cffi
+
+    _FFI = cffi.FFI()
+except ImportError:  # optional: ctypes does the same, a little slower
+    _FFI = None
+
+
+class PythonCall(WrapperAddressProtocol):
+    """A Python controller as the loop's function pointer (a cffi or ctypes callback).
+
+    The callback never lets an exception out (the C caller would print it and go on): it
     stores it on the binding and returns 1; the loop then disarms and the caller reports.
     """
 
@@ -226,29 +251,58 @@ class PythonCall(WrapperAddressProtocol):
         obs_array = bound.params.obs
         out = bound.params.out
         obs = Observation(obs_array, n_imu)
+        bound.observation = obs  # refreshed with the rig's constants (BoundPlugin.refresh_rig)
         update = controller.update
         reset = controller.reset
         unit = COMMANDS[controller.commands][1]
+        # per call: no allocation, no numpy scalars; memoryviews read and write Python floats
+        obs_mv = memoryview(obs_array)
+        out_mv = memoryview(out)
+        o_reset = PL.O_RESET
+        c0, c1, c2, c3 = range(PL.C_CMD, PL.C_CMD + 4)
+        a0, a1, a2 = range(PL.C_ATT_DES, PL.C_ATT_DES + 3)
+        r0, r1, r2 = range(PL.C_ATT_RATE_DES, PL.C_ATT_RATE_DES + 3)
+        command = Command
 
         def callback(t, _obs, _params, _state, _out):
             try:
-                if obs_array[PL.O_RESET] != 0.0:
+                if obs_mv[o_reset] != 0.0:
                     reset()
                 result = update(t, obs)
             except BaseException as exc:  # noqa: BLE001 - reported by the caller, KeyboardInterrupt re-raised there
                 bound.exc = exc
                 bound.exc_where = _where(exc)
                 return 1
+            if type(result) is tuple and len(result) == 4:  # the common answer, written without numpy
+                try:
+                    a, b, c, d = result
+                    out_mv[c0] = a
+                    out_mv[c1] = b
+                    out_mv[c2] = c
+                    out_mv[c3] = d
+                    return 0
+                except Exception:  # noqa: BLE001 - not numbers: _store says what is wrong
+                    pass
+            elif type(result) is command:
+                try:
+                    values, att, rate = result
+                    out_mv[c0], out_mv[c1], out_mv[c2], out_mv[c3] = values
+                    if att is not None:
+                        out_mv[a0], out_mv[a1], out_mv[a2] = att
+                    if rate is not None:
+                        out_mv[r0], out_mv[r1], out_mv[r2] = rate
+                    return 0
+                except Exception:  # noqa: BLE001 - _store says what is wrong
+                    pass
             try:
                 _store(result, out, unit)
-            except (TypeError, ValueError) as exc:  # what update returned is wrong: point at update, not here
+            except Exception as exc:  # noqa: BLE001 - what update returned is wrong: point at update, not here
                 bound.exc = exc
                 bound.exc_where = _returned_by(update)
                 return 1
             return 0
 
-        self._callback = _CALLBACK(callback)
-        self._address = ctypes.cast(self._callback, ctypes.c_void_p).value
+        self._callback, self._address = _c_callback(callback)
 
     def __wrapper_address__(self):
         return self._address

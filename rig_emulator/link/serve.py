@@ -141,7 +141,7 @@ def _build_server(args, overrides: dict, state, signing, endpoints):
     if delay > 0.0:
         time.sleep(delay)
     cfg = load_config(airframe=args.airframe, scenario=args.scenario, files=args.config, overrides=overrides)
-    with compile_notice():
+    with compile_notice(cfg=cfg):
         rig = prepare_rig(cfg)
     rest = rest_attitude(rig.sim.pp.hw, rig.sim.pp.g, math.radians(cfg["initial.euler_deg"][2]))
     if rest is not None:

@@ -473,6 +473,7 @@ class LiveRig:
         plugin.refresh_rig(cp)
         if check is not None:
             plugin.controller.params.array[:] = check.array
+            plugin.controller.params.refresh()
         return new_cfg
 
     def _guidance_from(self, cfg: RigConfig, current):

@@ -16,7 +16,7 @@ import numpy as np
 from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.control import fuzzy
 from rig_emulator.control.allocation import PRIORITIES
-from rig_emulator.control.strategies import laws
+from rig_emulator.controllers.builtin.strategies import laws
 from rig_emulator.guidance.offboard import OFB_SIZE
 from rig_emulator.guidance.runner import GUIDANCE_CODES
 from rig_emulator.physics.hardware import HardwareParams

@@ -12,7 +12,7 @@ It replaces the attitude loop only: the configured strategy's position loop (the
 fuzzy one with ``smc-flc``) hands it the shaped attitude reference and u1
 (``obs.attitude_target``, ``obs.thrust_target``); it commands u1 and body torques.
 ``rig-gcs reproduce --only helix --controller rig_emulator.controllers.examples.lqr:LQRAttitude``
-puts its Table 6 row next to the paper's (docs/YOUR_CONTROLLER.md).
+puts its Table 6 row next to the paper's (docs/how-to/your-controller.md).
 """
 
 import math

@@ -1,4 +1,4 @@
-"""The built-in ``pid`` strategy (rig_emulator/control/pid.py) re-written as a controller plug-in.
+"""The built-in ``pid`` strategy (rig_emulator/controllers/builtin/pid.py) re-written as a controller plug-in.
 
 It replaces both loops and commands u1 and body torques; the rig's allocation does the rest.
 Everything it needs comes through the plug-in interface: the onboard estimates, the guidance

@@ -1,4 +1,4 @@
-"""A controller plug-in's own parameters as MAVLink parameters (docs/YOUR_CONTROLLER.md).
+"""A controller plug-in's own parameters as MAVLink parameters (docs/how-to/your-controller.md).
 
 A plug-in declares ``params`` (name -> number or list of numbers) and ``param_prefix``
 (upper case, ends with ``_``; empty: none served). Each scalar is the parameter

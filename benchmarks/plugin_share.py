@@ -1,0 +1,75 @@
+"""Controller plug-ins against the built-in strategy in one warm process, timed in CPU time.
+
+``python -m benchmarks.plugin_share [--duration S] [--repeat N] [--cases a,b,...]``
+
+The ``plugins`` benchmark (``python -m benchmarks --only plugins``) runs every probe in fresh
+processes with an empty numba cache, so each probe pays a cold compile of the step loop first
+(minutes on a busy 2-core machine). This is the quick companion for a machine that is busy or
+for comparing source trees (run it with ``PYTHONPATH`` on each tree, the tree's cache warm): one
+process flies the helix (1 kHz physics, 500 Hz control, full sensing chain) with the built-in
+``pid`` strategy and with the plug-ins, alternated ``--repeat`` times, and reports each one's
+real-time factor in wall time and in the process's CPU time, and its CPU-time factor as a share
+of the built-in's, paired per repetition (the median of the pairs). Other processes on the
+machine disturb the CPU-time figures much less than the wall-clock ones.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+CASES = {
+    "builtin-pid": ("helix", None, "compiled"),
+    "compiled-pid": ("helix", "rig_emulator.controllers.examples.pid:PID", "compiled"),
+    "python-pid": ("helix", "rig_emulator.controllers.examples.pid:PID", "python"),
+    "trivial": ("hover", "benchmarks.plugins:TrivialHover", "python"),
+    "cascaded": ("helix", "rig_emulator.controllers.examples.cascaded_pid:CascadedPID", "python"),
+}
+
+
+def fly(name: str, duration: float):
+    """(wall, CPU) real-time factors of one flight of case ``name``."""
+    from rig_emulator.api import simulate
+
+    scenario, controller, call = CASES[name]
+    c0 = time.process_time()
+    r = simulate(scenario, strategy="pid", duration=duration, seed=0, controller=controller,
+                 overrides={"controller.call": call})
+    return r.sim_time_s / r.wall_time_s, r.sim_time_s / (time.process_time() - c0)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.plugin_share", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--duration", type=float, default=10.0, help="simulated s per flight (default %(default)s)")
+    ap.add_argument("--repeat", type=int, default=3, help="flights per case, alternated (default %(default)s)")
+    ap.add_argument("--cases", default=",".join(CASES), help="comma list of %(default)s")
+    args = ap.parse_args(argv)
+    names = args.cases.split(",")
+    if "builtin-pid" not in names:
+        names.insert(0, "builtin-pid")
+    for n in names:
+        if n not in CASES:
+            ap.error(f"unknown case {n!r}; cases: {', '.join(CASES)}")
+    t0 = time.perf_counter()
+    for n in names:  # compile, or load the cache
+        fly(n, 0.2)
+    print(f"compiled or loaded in {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
+    runs: dict = {n: [] for n in names}
+    for k in range(args.repeat):
+        for n in (names if k % 2 == 0 else names[::-1]):
+            runs[n].append(fly(n, args.duration))
+    print(f"helix {args.duration:g} s x {args.repeat}, load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    ref = runs["builtin-pid"]
+    for n in names:
+        wall = statistics.median(w for w, _ in runs[n])
+        cpu = statistics.median(c for _, c in runs[n])
+        share = statistics.median(c / rc for (_, c), (_, rc) in zip(runs[n], ref))
+        print(f"{n:14s} real-time factor {wall:7.1f}x wall, {cpu:7.1f}x CPU; share of the built-in's {share:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,15 @@
+"""The rig's built-in control laws, the four strategies' parts (``control.strategy``).
+
+* :mod:`.fuzzy` - the fuzzy law (FLC, Sec. 3-2, Eq. 14-37), one call per axis; :mod:`.fuzzy_surface`
+  its control surface (analysis);
+* :mod:`.smc` - the sliding-mode attitude law (Sec. 3-1, Eq. 5-13) and the switching function the
+  sliding-mode position loop uses;
+* :mod:`.pid` - the PID of the cascaded ``pid`` baseline;
+* :mod:`.strategies` - which law runs which loop for each strategy name.
+
+The stages that run them in the step loop (position law -> reference filter -> attitude law ->
+allocation) are :mod:`rig_emulator.control.controller`; a controller plug-in replaces one or both
+laws through the same stages (:mod:`rig_emulator.control.plugin_step`). The ``pid`` strategy
+written against the plug-in interface alone is :mod:`rig_emulator.controllers.examples.pid`.
+Compiled code: this folder keys the compiled-code cache (``rig_emulator/_jit.py``).
+"""
