@@ -47,7 +47,7 @@ FLAG_LOCKSTEP = 1
 
 @dataclass
 class Airframe:
-    """The rig as its documentation gives it (docs/YOUR_CONTROLLER.md, section 7.3): a plus frame."""
+    """The rig as its documentation gives it (docs/how-to/flight-stacks.md): a plus frame."""
 
     mass_kg: float = 2.23
     inertia: tuple = (6.2e-2, 6.2e-2, 1.16e-1)

@@ -42,7 +42,7 @@ def add_parser(sub) -> None:
     p.add_argument("--quick", action="store_true", help="shortened runs, fewer frequencies and masses: a smoke test, "
                                                         "not the reproduction")
     p.add_argument("--controller", metavar="MODULE:NAME", action="append",
-                   help="compare a controller plug-in (docs/YOUR_CONTROLLER.md) with the paper's four controllers "
+                   help="compare a controller plug-in (docs/how-to/your-controller.md) with the paper's four controllers "
                         "(SMC, FLC, SMC-FLC, PID) on shocks, harmonic, sweep, masses, helix and rectangle (--only "
                         "picks among them) instead of reproducing the paper's claims: tables over the seeds, figures "
                         "and better/same/worse verdicts (repeatable, or comma-separated, for several plug-ins; "

@@ -1,7 +1,7 @@
 """Your controller next to the paper's four, experiment by experiment: runs, metrics, the verdict rule.
 
 ``rig-gcs reproduce --controller package.module:Name`` flies each controller plug-in
-(docs/YOUR_CONTROLLER.md) and the paper's four controllers (SMC, FLC, SMC-FLC, PID) on the
+(docs/how-to/your-controller.md) and the paper's four controllers (SMC, FLC, SMC-FLC, PID) on the
 experiments of the reproduction that a controller can fly (:data:`EXPERIMENTS`), with the same
 scenarios, seeds and plants, and compares them metric by metric:
 

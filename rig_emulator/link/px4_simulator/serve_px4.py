@@ -11,7 +11,7 @@ DEFAULT_RATE_HZ = 250.0
 
 
 def add_px4_args(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("a flight stack in the loop (PX4's Simulator MAVLink API, in lockstep; docs/YOUR_CONTROLLER.md section 7)")
+    g = p.add_argument_group("a flight stack in the loop (PX4's Simulator MAVLink API, in lockstep; docs/how-to/flight-stacks.md)")
     g.add_argument("--px4-simulator", nargs="?", const=f"{DEFAULT_HOST}:{DEFAULT_PORT}", metavar="[HOST:]PORT",
                    help=f"be the simulator of a flight stack: listen for its TCP connection (default "
                         f"{DEFAULT_HOST}:{DEFAULT_PORT}, where PX4 SITL connects) or use serial:DEVICE[:BAUD] for a "
