@@ -40,6 +40,7 @@ DELAY_GRID = np.arange(0.0, 0.0605, 0.002)
 EXPONENT_GRID = np.arange(1.0, 3.01, 0.1)
 SKIP_S = 3.0  # the filters' start-up at the beginning of the log is left out
 OUTLIER_K = 4.0
+HIGH_SHARE = 0.8
 LC_STEP_N = 2.44 * 9.80665e-3  # the load cells' smallest step (sensors/load_cell.py)
 EPISODE_S = 0.3  # an outlier's episode: this long either side of it
 LOWER = np.array([0.3, 0.3, 0.3, 0.3, -3.0, 0.5, 0.0])
@@ -114,6 +115,17 @@ class MotorChainModel:
         a = self.rc.lc_alpha
         y = lfilter([a], [1.0, -(1.0 - a)], x, axis=0, zi=((1.0 - a) * x[:1]))[0] if a > 0.0 else x
         return y[self.row_in_lc], self.thrust(p, self.voltages(p[6], self.k_rows))
+
+
+def high_rows(model, p: np.ndarray, dt: float) -> np.ndarray:
+    """Rows within :data:`EPISODE_S` of a motor thrust above :data:`HIGH_SHARE` of the ceiling."""
+    rc = model.rc
+    x = model.thrust(p, model.voltages(p[6], model.k_rows))
+    bad = np.any(x > HIGH_SHARE * rc.f_ceiling, axis=1)
+    w = int(round(EPISODE_S / dt))
+    c = np.concatenate([[0], np.cumsum(bad)])
+    i = np.arange(bad.size)
+    return (c[np.clip(i + w + 1, 0, bad.size)] - c[np.clip(i - w, 0, bad.size)]) > 0
 
 
 def cell_noise_var(rc: RigConstants, thrust: np.ndarray) -> np.ndarray:
@@ -201,6 +213,11 @@ def fit_motor_chain(log, rc: RigConstants, rows: np.ndarray | None = None, fixed
     def resid(q):
         return (model.filtered(full(q))[0][use] - y).ravel()
 
+    y = log.thrust[use]
+    best = _grid_start(model, use, y, base, fixed)
+    # near the ceiling the firmware discards readings above it and its jump guard holds others: the
+    # filtered reading is biased there, so those rows are left out (judged on the chain at the start)
+    use &= ~high_rows(model, best, log.dt)
     y = log.thrust[use]
     best = _grid_start(model, use, y, base, fixed)
     steps = np.array([1e-4 if i < 6 else 2e-3 for i in free])

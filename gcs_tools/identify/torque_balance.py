@@ -53,6 +53,33 @@ class TorqueFit:
     noise_interval: np.ndarray  # (3, 2) 95 % interval
     load: np.ndarray          # (n_rows,) rotor load L
     lc_var: np.ndarray        # (n_rows, 3) the load cells' own noise variance in the residual
+    X: np.ndarray             # (n_rows, 3, 12) regressors
+    Y: np.ndarray             # (n_rows, 3) regressand (held parameters' terms taken out)
+    free: list                # indices of NAMES estimated
+    axis_weight: np.ndarray   # (3,) 1 / residual spread per axis (the second step's weights)
+    kappa: float
+
+    @property
+    def expected_var(self) -> np.ndarray:
+        """(n_rows, 3) the residual variance the noise model expects at each row."""
+        return self.kappa * (self.noise_sigma[None, :] * self.load[:, None]) ** 2 + self.lc_var
+
+    def held_out(self, window_s: float, t: np.ndarray) -> np.ndarray:
+        """Residuals of each window of ``window_s`` predicted by the regression fitted without it."""
+        out = np.full(self.Y.shape, np.nan)
+        edges = np.arange(np.floor(t[0]), t[-1] + window_s, window_s)
+        Xf = self.X[:, :, self.free]
+        wt = self.axis_weight
+        for a, b in zip(edges[:-1], edges[1:]):
+            w = (t >= a) & (t < b)
+            train = self.used & ~w
+            if train.sum() < 100 or not np.any(w & self.used):
+                continue
+            A = (Xf[train] * wt[None, :, None]).reshape(-1, len(self.free))
+            y = (self.Y[train] * wt[None, :]).ravel()
+            beta = np.linalg.lstsq(A, y, rcond=None)[0]
+            out[w] = self.Y[w] - Xf[w] @ beta
+        return out
 
 
 def _iir(x: np.ndarray, alpha: float) -> np.ndarray:
@@ -172,4 +199,4 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
         sig[ax] = np.sqrt(max(s2, 0.0))
         ci[ax] = np.sqrt(max(s2 - half, 0.0)), np.sqrt(max(s2 + half, 0.0))
     return TorqueFit(values=beta, cov=cov, residuals=res, used=used, lags=lags, noise_sigma=sig, noise_interval=ci,
-                     load=load, lc_var=lc_var)
+                     load=load, lc_var=lc_var, X=X, Y=Y, free=free, axis_weight=1.0 / scale, kappa=kappa)

@@ -14,8 +14,8 @@ settle         0-3       level, hover thrust                                    
 roll chirp     3-17      phi 6 deg to 0.6 Hz, then 1/f^2, chirp 0.15-2 Hz             Ixx, roll friction, motors 2/4
 pitch chirp    17-31     theta 6 deg, the same                                       Iyy, pitch friction, motors 1/3
 yaw chirp      31-43     psi 20 deg to 0.3 Hz, then 1/f^2, chirp 0.1-1 Hz            Izz, yaw friction
-thrust steps   43-55     u1 x (1.2, 0.8, 1.3, 0.75, 1.1, 1) of hover, 2 s each,      motor curve, gains, bias, delay
-                         0.4 s ramps, roll/pitch doublets of 4 deg
+thrust steps   43-55     u1 x (1.15, 0.8, 1.1, 0.7, 1.05, 1) of hover, 2 s each,       motor curve, gains, bias, delay
+                         0.4 s ramps, roll/pitch doublets of 3 deg
 roll swing     55-66     hold phi 22 deg 3.5 s, thrust down to 0.3 of hover over     pendulum (CoG), friction;
                          1.5 s, disarmed 7.5 s                                       motor curve and bias
 pitch swing    66-77     the same on theta, -22 deg                                  the same
@@ -53,7 +53,7 @@ PARTS = (
     ("pitch swing", 66.0, 77.0),
     ("yaw swing", 77.0, 90.0),
 )
-THRUST_STEPS = (1.2, 0.8, 1.3, 0.75, 1.1, 1.0)
+THRUST_STEPS = (1.15, 0.8, 1.1, 0.7, 1.05, 1.0)  # kept below 1.2: near their ceiling the load cells read low
 THRUST_RAMP_S = 0.4
 SWING_HOLD_S = 3.5
 LOW_THRUST = 0.3
@@ -117,9 +117,9 @@ def setpoint(t: float):
         ramp = min(tk / THRUST_RAMP_S, 1.0)  # a cosine ramp: a step would trip the load cells' jump guard
         thrust = prev + (THRUST_STEPS[k] - prev) * (0.5 - 0.5 * math.cos(math.pi * ramp))
         if 0.5 <= tk < 1.0:
-            att[k % 2] = 4.0 * D2R
+            att[k % 2] = 3.0 * D2R
         elif 1.0 <= tk < 1.5:
-            att[k % 2] = -4.0 * D2R
+            att[k % 2] = -3.0 * D2R
     elif 55.0 <= t < 77.0:
         axis, t0 = (0, 55.0) if t < 66.0 else (1, 66.0)
         tk = t - t0
