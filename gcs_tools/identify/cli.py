@@ -48,7 +48,7 @@ def add_parser(sub) -> None:
                     "(--tlog FILE --scenario NAME: simulated ATTITUDE, LOCAL_POSITION_NED and load cells against "
                     "the logged ones). Every evaluation is a set of headless runs on local processes or a Dask "
                     "cluster and is appended to --record, so rerunning the same command resumes without "
-                    "re-simulating. Writes the fitted values as a TOML preset for --config. See docs/IDENTIFY.md.",
+                    "re-simulating. Writes the fitted values as a TOML preset for --config. See docs/how-to/identify.md.",
         epilog="examples:\n"
                "  rig-gcs identify --paper --params motors.time_constant=0.02:0.1,airframe.ixx=0.04:0.09 "
                "-o fit.toml --record fit.jsonl\n"
