@@ -40,7 +40,8 @@ DELAY_GRID = np.arange(0.0, 0.0605, 0.002)
 EXPONENT_GRID = np.arange(1.0, 3.01, 0.1)
 SKIP_S = 3.0  # the filters' start-up at the beginning of the log is left out
 OUTLIER_K = 4.0
-HIGH_SHARE = 0.8
+HIGH_SHARE = 0.88
+HIGH_EPISODE_S = 0.3
 LC_STEP_N = 2.44 * 9.80665e-3  # the load cells' smallest step (sensors/load_cell.py)
 EPISODE_S = 0.3  # an outlier's episode: this long either side of it
 LOWER = np.array([0.3, 0.3, 0.3, 0.3, -3.0, 0.5, 0.0])
@@ -81,7 +82,9 @@ class MotorChainModel:
         if rc.tau_motor > 0.0:
             h = dt / rc.tau_motor
             a = 1.0 - h + h * h / 2.0 - h ** 3 / 6.0 + h ** 4 / 24.0  # RK4's amplification of V' = -V / tau
-            m = lfilter([1.0 - a], [1.0, -a], u, axis=0, zi=(a * u[:1]))[0]
+            # the voltage at step k is the state the sensors see before step k's command acts on it
+            u_prev = np.vstack([u[:1], u[:-1]])
+            m = lfilter([1.0 - a], [1.0, -a], u_prev, axis=0, zi=(a * u[:1]))[0]
         else:
             m = u
         self.m = m  # lagged voltage at every physics step, before the delay
@@ -117,12 +120,10 @@ class MotorChainModel:
         return y[self.row_in_lc], self.thrust(p, self.voltages(p[6], self.k_rows))
 
 
-def high_rows(model, p: np.ndarray, dt: float) -> np.ndarray:
-    """Rows within :data:`EPISODE_S` of a motor thrust above :data:`HIGH_SHARE` of the ceiling."""
-    rc = model.rc
-    x = model.thrust(p, model.voltages(p[6], model.k_rows))
-    bad = np.any(x > HIGH_SHARE * rc.f_ceiling, axis=1)
-    w = int(round(EPISODE_S / dt))
+def high_rows(measured: np.ndarray, rc: RigConstants, dt: float) -> np.ndarray:
+    """Rows within :data:`HIGH_EPISODE_S` of a load-cell thrust above :data:`HIGH_SHARE` of the ceiling."""
+    bad = np.any(measured > HIGH_SHARE * rc.f_ceiling, axis=1)
+    w = int(round(HIGH_EPISODE_S / dt))
     c = np.concatenate([[0], np.cumsum(bad)])
     i = np.arange(bad.size)
     return (c[np.clip(i + w + 1, 0, bad.size)] - c[np.clip(i - w, 0, bad.size)]) > 0
@@ -213,11 +214,9 @@ def fit_motor_chain(log, rc: RigConstants, rows: np.ndarray | None = None, fixed
     def resid(q):
         return (model.filtered(full(q))[0][use] - y).ravel()
 
-    y = log.thrust[use]
-    best = _grid_start(model, use, y, base, fixed)
     # near the ceiling the firmware discards readings above it and its jump guard holds others: the
-    # filtered reading is biased there, so those rows are left out (judged on the chain at the start)
-    use &= ~high_rows(model, best, log.dt)
+    # filtered reading is biased there, so those rows are left out
+    use &= ~high_rows(log.thrust, rc, log.dt)
     y = log.thrust[use]
     best = _grid_start(model, use, y, base, fixed)
     steps = np.array([1e-4 if i < 6 else 2e-3 for i in free])

@@ -137,6 +137,8 @@ def setpoint(t: float):
             rate[2] = 60.0 * D2R
         elif tk >= 6.0:
             armed = False
+    elif t >= DURATION_S:
+        armed = False  # the programme ends disarmed, hanging on the joint
     return armed, att, rate, thrust
 
 
