@@ -156,7 +156,9 @@ class Simulation:
         (the loop is called in pieces between them, which changes nothing else); the
         identification flight (``guidance.type = "sysid"``) sets its set-point before each of its
         update periods (guidance/sysid.py)."""
-        if self.programme is None:
+        if self.programme is None or n_steps == 0:  # 0: a warm-up still calls (compiles) the loop
+            if self.programme is not None:
+                self.programme.apply(self)
             self._advance_faults(n_steps)
             return
         for _, n in self.programme.pieces(self.k, n_steps):
