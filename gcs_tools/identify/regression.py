@@ -40,6 +40,9 @@ HOLDABLE = {
 }
 
 
+NONNEGATIVE = ("joint.viscous", "joint.coulomb", "disturbance.torque_noise", "control.actuation_delay")
+
+
 @dataclass
 class Estimate:
     key: str          # the configuration key (rig-emulator params)
@@ -167,7 +170,9 @@ def report_lines(r: RegressionResult) -> list[str]:
 
 def preset_text(r: RegressionResult, header: list[str]) -> str:
     """The estimated keys as a TOML preset for --config (list keys whole)."""
-    vals = {e.key: e.value for e in r.estimates if not e.held}
+    # a key that cannot be negative gets 0 where its estimate is (the report keeps the estimate itself)
+    vals = {e.key: (max(e.value, 0.0) if e.key.startswith(NONNEGATIVE) else e.value) for e in r.estimates
+            if not e.held}
     lists: dict = {}
     scalars = {}
     for k, v in vals.items():
