@@ -15,6 +15,7 @@ from . import many_rigs  # noqa: F401
 from . import plugins  # noqa: F401
 from . import px4_lockstep, ardupilot_json  # noqa: F401
 from . import served_max  # noqa: F401
+from . import sysid_fit  # noqa: F401
 from .harness import REGISTRY
 
 __all__ = ["REGISTRY"]

@@ -20,7 +20,7 @@ Commands (``rig-gcs COMMAND --help`` for each):
   verdict on each claim (:mod:`gcs_tools.reproduce`, docs/explanation/readings.md).
 * ``identify --params KEY=LO:HI,... --paper | --tlog run.tlog --scenario NAME -o fit.toml`` - fit
   parameters of the emulated rig to the paper's numbers or to flight logs, written as a preset
-  (:mod:`gcs_tools.identify`, docs/IDENTIFY.md).
+  (:mod:`gcs_tools.identify`, docs/how-to/identify.md).
 
 CONNECTION is a pymavlink connection string: ``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``, ...
 

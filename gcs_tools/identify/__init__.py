@@ -13,6 +13,6 @@ Every evaluation runs on the sweep engine (:mod:`rig_emulator.sweep`: local proc
 Dask cluster) and is appended to a JSON-lines record, so a rerun resumes without
 re-simulating (:mod:`gcs_tools.identify.record`). The optimiser is scipy's bounded
 ``least_squares`` (:mod:`gcs_tools.identify.fit`); the result is a TOML preset that
-``--config`` accepts (:mod:`gcs_tools.identify.preset`). docs/IDENTIFY.md describes it.
+``--config`` accepts (:mod:`gcs_tools.identify.preset`). docs/how-to/identify.md describes it.
 (Nothing is imported here, so ``rig-gcs --help`` stays fast.)
 """

@@ -48,12 +48,13 @@ def add_parser(sub) -> None:
                     "(--tlog FILE --scenario NAME: simulated ATTITUDE, LOCAL_POSITION_NED and load cells against "
                     "the logged ones). Every evaluation is a set of headless runs on local processes or a Dask "
                     "cluster and is appended to --record, so rerunning the same command resumes without "
-                    "re-simulating. Writes the fitted values as a TOML preset for --config. See docs/IDENTIFY.md.",
+                    "re-simulating. Writes the fitted values as a TOML preset for --config. See docs/how-to/identify.md.",
         epilog="examples:\n"
                "  rig-gcs identify --paper --params motors.time_constant=0.02:0.1,airframe.ixx=0.04:0.09 "
                "-o fit.toml --record fit.jsonl\n"
                "  rig-gcs identify --tlog run.tlog --scenario helix --strategy smc-flc "
-               "--params smc.k[0]=0.5:3 -o twin.toml")
+               "--params smc.k[0]=0.5:3 -o twin.toml\n"
+               "  rig-gcs identify --tlog sysid.tlog -o my-rig.toml      (regression on an identification flight)")
     g = p.add_argument_group("parameters")
     g.add_argument("--params", action="append", default=[], metavar="KEY=LO:HI[:START],...",
                    help="parameters to fit and their bounds; KEY as for --set, or one element KEY[i] of a list key, "
@@ -90,6 +91,17 @@ def add_parser(sub) -> None:
                         "markdown); every key starts mid-range (docs/explanation/paper-fit.md)")
     g.add_argument("--tlog", action="append", default=[], metavar="FILE", help="a flight log to fit (repeatable)")
     g = p.add_argument_group("flight logs")
+    g.add_argument("--method", choices=("auto", "regression", "simulation"), default="auto",
+                   help="regression: every effect from an identification flight's log (scenario sysid) by "
+                        "regression, with 95 %% intervals and a model check, nothing simulated; simulation: the "
+                        "scenario re-simulated and --params fitted; auto (default): regression for --tlog without "
+                        "--params / --spec")
+    g.add_argument("--hold", action="append", default=[], metavar="EFFECT",
+                   help="regression: keep an effect at the base configuration's value (repeatable): thrust_gain, "
+                        "thrust_bias, curve, delay, inertia, viscous, coulomb, cog")
+    g.add_argument("--calibration-study", type=_evals, metavar="N",
+                   help="run the regression's calibration study: N random hidden draws (sysid flights on hilms), "
+                        "coverage of the 95 %% intervals and median errors, matched and mismatched")
     g.add_argument("--scenario", action="append", default=[], metavar="NAME",
                    help="the scenario preset flown in the log (once for all logs, or once per --tlog in order)")
     g.add_argument("--strategy", action="append", default=[], help="the strategy flown (once, or once per --tlog; "
@@ -110,7 +122,8 @@ def add_parser(sub) -> None:
     g.add_argument("--config", action="append", default=[], metavar="FILE", help="extra TOML parameter file (repeatable)")
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one parameter (repeatable)")
     g = p.add_argument_group("running")
-    g.add_argument("-o", "--output", required=True, metavar="FILE.toml", help="the fitted preset to write")
+    g.add_argument("-o", "--output", metavar="FILE.toml", help="the fitted preset to write (needed by the "
+                                                                "simulation method)")
     g.add_argument("--record", metavar="FILE.jsonl", help="record of every evaluation; rerunning with it resumes")
     g.add_argument("--json", metavar="FILE.json", help="also write the full result (values, sigmas, residuals) as JSON")
     g.add_argument("--workers", type=_workers, help="local processes (default: one per core; 1 = in this process)")
@@ -290,7 +303,61 @@ def _targets_text(problem) -> str:
                                       f"{', '.join(problem.channels)})" for s in problem.logs) + f", seed {problem.seed}"
 
 
+def _method(args) -> str:
+    if args.method != "auto":
+        return args.method
+    return "regression" if args.tlog and not args.params and not args.spec and not args.paper else "simulation"
+
+
+def cmd_identify_regression(args) -> int:
+    """``--method regression``: one identification log, every effect with its 95 % interval."""
+    from gcs_tools.identify.regression import identify_log, preset_text, report_lines
+    from protocol.atomic_file import atomic_write_text
+    from rig_emulator.config.loader import ConfigError, load_config, parse_override
+
+    if len(args.tlog) != 1:
+        raise UsageError("--method regression fits one log (--tlog FILE) at a time")
+    if args.params or args.spec or args.paper:
+        raise UsageError("--method regression estimates every effect itself: no --params, --spec or --paper")
+    try:
+        overrides = dict(parse_override(x) for x in args.set)
+        cfg = load_config(airframe=args.airframe, files=args.config, overrides=overrides)
+        result = identify_log(args.tlog[0], cfg, hold=tuple(args.hold), t_from=args.t_from, t_to=args.t_to)
+    except (ConfigError, ValueError) as exc:
+        raise UsageError(str(exc)) from None
+    for line in report_lines(result):
+        print(line)
+    if args.output:
+        out = Path(args.output)
+        argv = getattr(args, "argv", None)
+        command = "rig-gcs " + shlex.join(argv if argv is not None else sys.argv[1:])
+        header = [f"fitted by: {command}", f"log: {args.tlog[0]}",
+                  "model check: " + ("explains the log" if result.explained else
+                                     "DOES NOT explain the log: " + "; ".join(f.text() for f in result.findings))]
+        atomic_write_text(out, preset_text(result, header))
+        load_config(airframe=args.airframe, files=[*args.config, str(out)], overrides=overrides)  # it loads
+        print(f"wrote {out}")
+    if args.json:
+        doc = {"log": args.tlog[0], "explained": result.explained, "wall_s": result.wall_s,
+               "estimates": [e.__dict__ for e in result.estimates], "findings": [f.__dict__ for f in result.findings],
+               "worst": result.worst, "whiteness": result.whiteness}
+        atomic_write_text(args.json, json.dumps(doc, indent=1, default=float) + "\n")
+    return EXIT_OK
+
+
 def cmd_identify(args) -> int:
+    if args.calibration_study:
+        from gcs_tools.identify.study import cmd_study
+
+        return cmd_study(args)
+    if _method(args) == "regression":
+        return cmd_identify_regression(args)
+    if not args.output:
+        raise UsageError("-o FILE.toml: the fitted preset to write")
+    return _cmd_identify_simulation(args)
+
+
+def _cmd_identify_simulation(args) -> int:
     from gcs_tools.identify.fit import DEFAULT_FD_STEP, PAPER_FD_STEP, identify
     from gcs_tools.identify.preset import header_lines, preset_text
     from protocol.atomic_file import atomic_write_text

@@ -88,7 +88,7 @@ def fmt_value(v: float, sigma: float | None = None) -> str:
 
 def header_lines(result, command: str, date: str, version: str, targets: str, base_text: str) -> list[str]:
     lines = [
-        "hilms-sil parameter preset fitted by `rig-gcs identify` (docs/IDENTIFY.md); use it with --config.",
+        "hilms-sil parameter preset fitted by `rig-gcs identify` (docs/how-to/identify.md); use it with --config.",
         f"command: {command}",
         f"date: {date} (hilms-sil {version})",
         f"fitted on top of: {base_text}",

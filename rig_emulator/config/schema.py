@@ -100,7 +100,7 @@ def FS(doc, unit="", lo=-math.inf, hi=math.inf, length=None):
 
 
 STRATEGIES = ("smc-flc", "flc", "smc", "pid")
-GUIDANCE_TYPES = ("hover", "attitude", "helix", "waypoints")
+GUIDANCE_TYPES = ("hover", "attitude", "helix", "waypoints", "sysid")
 FENCE_ACTIONS = ("none", "warning", "hold", "return", "terminate", "land")  # PX4 GF_ACTION order
 OFFBOARD_LOSS_ACTIONS = ("land", "hold", "return", "terminate")  # PX4 COM_OBL_ACT order
 

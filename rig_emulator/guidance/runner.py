@@ -42,7 +42,9 @@ ATTITUDE = 1
 HELIX = 2
 WAYPOINTS = 3
 OFFBOARD = 4  # an external set-point (guidance/offboard.py); only a running rig selects it
-GUIDANCE_CODES = {"hover": HOVER, "attitude": ATTITUDE, "helix": HELIX, "waypoints": WAYPOINTS}
+# "sysid": the identification flight (guidance/sysid.py) flies offboard attitude set-points it writes
+# between the loop's chunks; it starts as a level attitude hold
+GUIDANCE_CODES = {"hover": HOVER, "attitude": ATTITUDE, "helix": HELIX, "waypoints": WAYPOINTS, "sysid": ATTITUDE}
 
 GS_INDEX = 0  # waypoint being flown to
 GS_T0 = 1  # start time of the current virtual line

@@ -300,6 +300,7 @@ class LiveRig:
         swung there on the bench. A rig with no hanging rest (``hilms-ideal``: any attitude is
         at rest) keeps the headless scenarios' initial state (``initial.euler_deg``, motors at
         the hover voltage), so a served flight started at t = 0 retraces the headless one."""
+        self.sim.programme = None  # a served rig flies what its ground station commands, not the sysid programme
         sim = self.sim
         psi = math.radians(sim.cfg["initial.euler_deg"][2])
         rest = rest_attitude(sim.pp.hw, sim.pp.g, psi)

@@ -19,6 +19,7 @@ from rig_emulator.simulation import log_layout as L
 from rig_emulator.control.supervisor import F_FAILSAFE, reset_failsafe, supervisor_params, supervisor_state
 from rig_emulator.simulation.faults import FaultEvent, FaultInjector, FaultStatus, fault_status
 from rig_emulator.simulation import rng_bits
+from rig_emulator.guidance.sysid import SysidProgramme
 from rig_emulator.simulation.entry_points import BoundEntry
 from rig_emulator.simulation.loop import run_steps
 from rig_emulator.control.plugin_layout import P_EXTERNAL
@@ -119,6 +120,7 @@ class Simulation:
         self._armed = True
         self._loop = BoundEntry(run_steps)  # the step loop's entry point for this rig's objects
         self._rng_held = None  # (bit generator, its pointers): _rng_pointers
+        self.programme = SysidProgramme(self) if cfg["guidance.type"] == "sysid" else None
 
     @property
     def time(self) -> float:
@@ -151,7 +153,19 @@ class Simulation:
 
     def advance(self, n_steps: int) -> None:
         """Run ``n_steps`` physics steps, switching the config's timed faults on at their step
-        (the loop is called in pieces between them, which changes nothing else)."""
+        (the loop is called in pieces between them, which changes nothing else); the
+        identification flight (``guidance.type = "sysid"``) sets its set-point before each of its
+        update periods (guidance/sysid.py)."""
+        if self.programme is None or n_steps == 0:  # 0: a warm-up still calls (compiles) the loop
+            if self.programme is not None:
+                self.programme.apply(self)
+            self._advance_faults(n_steps)
+            return
+        for _, n in self.programme.pieces(self.k, n_steps):
+            self.programme.apply(self)
+            self._advance_faults(n)
+
+    def _advance_faults(self, n_steps: int) -> None:
         end = self.k + n_steps
         while self._pending_faults and self._pending_faults[0][0] < end:
             k_event, e = self._pending_faults.pop(0)
