@@ -50,7 +50,7 @@ class Example:
 
 
 #: pages the site does not build (mkdocs.yml exclude_docs): they are being replaced by new how-to pages
-NOT_BUILT = {"IDENTIFY.md"}
+NOT_BUILT: set[str] = set()
 
 
 def pages() -> list[Path]:
