@@ -155,7 +155,7 @@ def datagrams(draw):
 
 def _stored_state_is_valid(server) -> None:
     cfg = server.rig.cfg
-    for key in {p.key for p in server.params.table.params}:
+    for key in {p.key for p in server.params.table.params if not getattr(p, "read_only", False)}:  # derived: no config key
         value = cfg[key]
         check_value(key, SCHEMA[key], list(value) if isinstance(value, tuple) else value)
     for item in server.mission.items:
