@@ -85,10 +85,10 @@ def test_bad_fault_arguments_are_denied_with_a_reason(client):
 
 def test_motor_thrust_loss_then_the_loss_of_control_failsafe(rig, client):
     assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED
-    assert command(client, FAULT, MOTOR, 2, M.HILMS_FAULT_THRUST_LOSS, 0.5).result == ACCEPTED
-    assert _text(client, lambda t: t == "motor 2: thrust_loss 50 % injected") is not None
+    assert command(client, FAULT, MOTOR, 2, M.HILMS_FAULT_THRUST_LOSS, 1.0).result == ACCEPTED
+    assert _text(client, lambda t: t == "motor 2: thrust_loss 100 % injected") is not None
     assert _sys_status(client, lambda h: not h & M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS) is not None
-    # the paper's SMC cannot hold 50 % on one motor (docs/how-to/faults.md): loss of control, motors stopped
+    # no attitude law holds the rig on three motors (docs/how-to/faults.md): loss of control, motors stopped
     severity, lost = _text(client, lambda t: t.startswith("loss of control"))
     assert severity == M.MAV_SEVERITY_CRITICAL and "disarmed" in lost
     hb = recv(client, "HEARTBEAT", condition=lambda m: m.system_status == M.MAV_STATE_EMERGENCY)
