@@ -26,7 +26,8 @@ def add_ardupilot_args(p: argparse.ArgumentParser) -> None:
                         f"SITL's -I N) with the rig's state as JSON, one plant step per new frame. The rig's own "
                         f"controllers are off; --mavlink endpoints keep serving the rig's telemetry (default "
                         f"tcpin:127.0.0.1:{GROUND_TCP_PORT} + 10 N: SITL itself listens on 5760 + 10 N). ArduCopter "
-                        f"needs the rig's frame and motor routing: --defaults ...,{PARAM_FILE}")
+                        "needs the rig's frame and motor routing: --defaults ...,PATH/hilms.parm (the file installed "
+                        "with the rig as rig_emulator/link/ardupilot_json/hilms.parm; the rig prints its path at start-up)")
     g.add_argument("--ardupilot-rate", type=float, default=None, metavar="HZ",
                    help="the plant's step per ArduPilot frame, a divisor of the physics rate (default: the physics "
                         "rate, 1000 Hz: one physics step per frame)")
