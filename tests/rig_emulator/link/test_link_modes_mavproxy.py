@@ -9,6 +9,8 @@ listed name with ``mode NAME``; one bare name (``posctl``) and the hand-typed fa
 ``long DO_SET_MODE <base> <main> <sub>`` are checked too. The results (what the rig did with
 every name) are printed; docs/how-to/ground-stations.md quotes them."""
 
+import math
+
 import pytest
 from pymavlink import mavutil
 
@@ -28,6 +30,27 @@ def _position(obs):
         pass
     m = recv(obs, "LOCAL_POSITION_NED", 5.0)
     return m.y, m.x, -m.z
+
+
+def _wait_still(obs, rate_deg_s=5.0, still_s=1.0, guard_s=60.0):
+    """Wait until the rig's body rates (ATTITUDE) stay below ``rate_deg_s`` for ``still_s`` of
+    simulated time; returns the simulated time waited. Judged on the messages' own stamps."""
+    while obs.recv_match(blocking=False) is not None:
+        pass
+    t0 = since = None
+    while True:
+        m = recv(obs, "ATTITUDE", 5.0)
+        assert m is not None, "no ATTITUDE from the rig"
+        t = m.time_boot_ms * 1e-3
+        t0 = t if t0 is None else t0
+        rate = math.degrees(math.sqrt(m.rollspeed ** 2 + m.pitchspeed ** 2 + m.yawspeed ** 2))
+        if rate < rate_deg_s:
+            since = t if since is None else since
+            if t - since >= still_s:
+                return t - t0
+        else:
+            since = None
+        assert t - t0 < guard_s, f"the rig still turns at {rate:.0f} deg/s {guard_s:g} s after the landing"
 
 
 def _reported_mode(obs):
@@ -112,7 +135,14 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
                     break
             else:
                 raise AssertionError("MIS_TAKEOFF_ALT not set: " + out.transcript(20))
+            # The hardware rig disarmed on landing swings down to its hanging tilt on the joint
+            # (joint.cog_offset) and its pre-arm check refuses arming while it still turns ("Arming
+            # denied: still rotating"), which is what the rig should do: wait for the swing to die out,
+            # as an operator does, then arm and check that it armed.
+            swing = _wait_still(obs)
             send("arm throttle")
+            assert out.wait_for(r"\bARMED\b", timeout=20) is not None, out.transcript(20)
+            results["arm throttle after the landing"] = f"ARMED after {swing:.1f} s (simulated) waiting for the rig to hang still"
             send("takeoff 0")
             assert out.wait_for(r"takeoff complete", timeout=60) is not None
             up = _position(obs)[2]
