@@ -18,6 +18,7 @@ as a .tlog, so the same checks run on live and headless runs.
 from __future__ import annotations
 
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -81,7 +82,7 @@ class RigSession:
 
         pts = np.asarray(points_enu, dtype=float).reshape(-1, 3)
         got = fly(self.link, pts, np.full(pts.shape[0], radius), speed=speed, min_leg_time=min_leg_time,
-                  timeout_s=timeout_s)
+                  timeout_s=timeout_s, notice=lambda text: warnings.warn(text, RuntimeWarning, stacklevel=3))
         self.reached.extend(got)
         return got
 

@@ -207,7 +207,8 @@ def cmd_fly(args) -> int:
         print(f"flying {n} waypoints at {args.speed:g} m/s (switching radius {radii[0]:g} m)", flush=True)
         reached = fly(link, points, radii, speed=args.speed, min_leg_time=args.min_leg_time, timeout_s=args.timeout,
                       link_timeout_s=args.link_timeout, position_hz=args.position_rate,
-                      report=lambda r, n: print(format_reached(r, n), flush=True))
+                      report=lambda r, n: print(format_reached(r, n), flush=True),
+                      notice=lambda text: print(f"warning: {text}", file=sys.stderr, flush=True))
     print(f"all {len(reached)} waypoints reached")
     return EXIT_OK
 

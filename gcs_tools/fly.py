@@ -39,6 +39,10 @@ DEFAULT_MIN_LEG_TIME = 1.0  # s, the rig's guidance.min_leg_time
 DEFAULT_POSITION_HZ = 20.0
 NAN = math.nan
 PX4_OFFBOARD = 6  # PX4's main mode OFFBOARD (custom_mode = 6 << 16)
+#: how often :func:`fly` switches back to OFFBOARD after the vehicle's offboard-loss failsafe
+DEFAULT_RESUMES = 3
+#: what the rig's offboard-loss failsafe says (rig_emulator.link.commands.flight_monitors)
+OFFBOARD_LOSS_TEXT = "offboard set-points lost"
 
 
 @dataclass(frozen=True)
@@ -62,12 +66,19 @@ def send_target(link: Link, t_ms: int, enu) -> None:
 def start_offboard(link: Link, send_setpoint, attempts: int = 3, timeout_s: float = COMMAND_TIMEOUT_S,
                    period_s: float = 1.0 / DEFAULT_POSITION_HZ) -> None:
     """Switch the vehicle to OFFBOARD (DO_SET_MODE with PX4's custom mode 6) while streaming
-    ``send_setpoint()`` every ``period_s`` (wall time), before and during the wait for the
-    answer: PX4 enters OFFBOARD only while a set-point stream flows, and leaves it again when
-    the stream pauses (COM_OF_LOSS_T), so the stream never waits for the command. A refusal
-    or a missing answer is retried; OperationError after ``attempts``."""
+    ``send_setpoint()`` before and during the wait for the answer: PX4 enters OFFBOARD only
+    while a set-point stream flows, and leaves it again when the stream pauses (COM_OF_LOSS_T).
+
+    The stream is paced on the vehicle's clock: one set-point per LOCAL_POSITION_NED received,
+    so a vehicle running many times faster than real time still sees it at the position rate;
+    ``period_s`` of wall time without one sends a set-point anyway. A refusal or a missing
+    answer is retried; OperationError after ``attempts``."""
     result = None
     stale = link.stale_acks
+
+    def answer_or_position(m):
+        return m.get_type() == "LOCAL_POSITION_NED" or (m.command == M.MAV_CMD_DO_SET_MODE and stale.fresh(m))
+
     for attempt in range(attempts):
         send_setpoint()
         link.mav.command_long_send(link.target_system, link.target_component, M.MAV_CMD_DO_SET_MODE, attempt,
@@ -75,10 +86,9 @@ def start_offboard(link: Link, send_setpoint, attempts: int = 3, timeout_s: floa
                                    0.0, NAN, NAN, NAN, NAN)
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
-            ack = link.recv("COMMAND_ACK", period_s,
-                            lambda m: m.command == M.MAV_CMD_DO_SET_MODE and stale.fresh(m))
+            ack = link.recv(["COMMAND_ACK", "LOCAL_POSITION_NED"], period_s, answer_or_position)
             send_setpoint()
-            if ack is None:
+            if ack is None or ack.get_type() != "COMMAND_ACK":
                 continue
             stale.consumed(ack)
             result = ack.result
@@ -92,17 +102,44 @@ def start_offboard(link: Link, send_setpoint, attempts: int = 3, timeout_s: floa
     raise OperationError(f"the vehicle refused OFFBOARD ({name}) with a set-point stream flowing")
 
 
+def vehicle_mode(link: Link) -> tuple[int, int] | None:
+    """(main, sub) PX4 mode of the vehicle's latest HEARTBEAT seen on the link (None before one)."""
+    hb = link.conn.messages.get("HEARTBEAT")
+    if hb is None or hb.get_srcSystem() != link.target_system or hb.type == M.MAV_TYPE_GCS:
+        return None
+    return (hb.custom_mode >> 16) & 0xFF, (hb.custom_mode >> 24) & 0xFF
+
+
+def last_statustext(link: Link) -> str:
+    st = link.conn.messages.get("STATUSTEXT")
+    return "" if st is None else str(st.text)
+
+
 def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_time: float = DEFAULT_MIN_LEG_TIME,
         timeout_s: float = 600.0, link_timeout_s: float = 5.0, position_hz: float = DEFAULT_POSITION_HZ,
-        arm: bool = True, report=None) -> list[Reached]:
+        arm: bool = True, report=None, resumes: int = DEFAULT_RESUMES, notice=None) -> list[Reached]:
     """Fly every waypoint in order; returns when the last is reached (OperationError on timeout/link loss).
 
     ``points_enu`` (N, 3) world ENU metres about the vehicle's local origin, ``radii`` (N,)
     switching radii (m), ``speed`` (m/s) and ``min_leg_time`` (s) size each virtual line.
     ``report(Reached, n)`` is called at each waypoint.
+
+    The vehicle leaving OFFBOARD ends the flight with OperationError naming the mode it took
+    and what it said (a fence breach, a mode command from another ground station), except
+    after its offboard-loss failsafe ("offboard set-points lost"): the tool's own stream
+    paused (a starved process, a rig far faster than real time), so the tool switches back
+    to OFFBOARD, as offboard scripts do, at most ``resumes`` times, each told to
+    ``notice(text)``.
     """
     pts = np.asarray(points_enu, dtype=float).reshape(-1, 3)
     radii = np.broadcast_to(np.asarray(radii, dtype=float), (pts.shape[0],))
+    sp_pos, sp_vel = np.zeros(3), np.zeros(3)
+    # the guidance functions run once (and compile, or load from the cache: seconds) before the
+    # link is read: meanwhile the vehicle's telemetry would pile up unread, and OFFBOARD's
+    # stream must not pause once it is entered
+    line_setpoint(0.0, 0.0, leg_duration(0.0, 0.0, 0.0, *pts[0], speed, min_leg_time), 0.0, 0.0, 0.0, *pts[0],
+                  sp_pos, sp_vel)
+    waypoint_reached(0.0, 0.0, 0.0, *pts[0], radii[0])
     if link.target_system is None:
         link.wait_vehicle()
     if position_hz > 0:
@@ -114,14 +151,10 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
         link.arm()
     deadline = time.monotonic() + timeout_s
     reached: list[Reached] = []
-    sp_pos, sp_vel = np.zeros(3), np.zeros(3)
     pos, t = _position(msg), msg.time_boot_ms * 1e-3
-    # the guidance functions run (and compile: seconds on a cold cache) before OFFBOARD, whose
-    # stream must not pause once it is entered
-    line_setpoint(t, t, leg_duration(*pos, *pts[0], speed, min_leg_time), *pos, *pts[0], sp_pos, sp_vel)
-    waypoint_reached(*pos, *pts[0], radii[0])
     hold = pos.copy()
     start_offboard(link, lambda: send_target(link, int(t * 1e3), hold))
+    texts: list[str] = []  # the vehicle's STATUSTEXTs since OFFBOARD was entered
     for i, (target, radius) in enumerate(zip(pts, radii)):
         start, t0 = pos.copy(), t
         duration = leg_duration(*start, *target, speed, min_leg_time)
@@ -137,12 +170,36 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
             if time.monotonic() > deadline:
                 raise OperationError(f"timeout after {timeout_s:g} s: waypoint {i + 1}/{pts.shape[0]} not reached "
                                      f"(error {np.linalg.norm(pos - target):.3f} m, radius {radius:g} m)")
-            msg = link.recv("LOCAL_POSITION_NED", link_timeout_s)
+            msg = link.recv(["LOCAL_POSITION_NED", "STATUSTEXT"], link_timeout_s)
             if msg is None:
                 raise OperationError(f"link lost: no LOCAL_POSITION_NED for {link_timeout_s:g} s "
                                      f"(waypoint {i + 1}/{pts.shape[0]})")
+            if msg.get_type() == "STATUSTEXT":
+                texts.append(str(msg.text))
+                continue
             pos, t = _position(msg), msg.time_boot_ms * 1e-3
+            mode = vehicle_mode(link)
+            if mode is None or mode[0] == PX4_OFFBOARD:
+                continue
+            said = "".join(texts[-4:])  # a long text comes in chunks
+            if OFFBOARD_LOSS_TEXT in said and resumes > 0:
+                resumes -= 1
+                if notice is not None:
+                    notice(f"the vehicle's offboard-loss failsafe took over ({said.strip()}): "
+                           f"back to OFFBOARD at waypoint {i + 1}/{pts.shape[0]}")
+                texts.clear()
+                sp_now = sp_pos.copy()
+                start_offboard(link, lambda: send_target(link, int(t * 1e3), sp_now))
+                continue
+            raise OperationError(f"the vehicle left OFFBOARD for {_mode_name(link)} at waypoint "
+                                 f"{i + 1}/{pts.shape[0]}" + (f": {said.strip()}" if said else ""))
     return reached
+
+
+def _mode_name(link: Link) -> str:
+    from pymavlink import mavutil
+
+    return mavutil.mode_string_v10(link.conn.messages["HEARTBEAT"])
 
 
 def format_reached(r: Reached, n: int, radius: float | None = None) -> str:
