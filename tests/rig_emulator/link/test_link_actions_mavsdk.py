@@ -76,18 +76,25 @@ def test_mavsdk_actions_fly_the_rig():
             assert param.get_param_float("MPC_XY_CRUISE") == pytest.approx(0.8)
             results["param.set_param_float('MPC_XY_CRUISE', 0.8)"] = "Success (read back 0.80)"
             act("goto_location", lambda: action.goto_location(lat, lon, alt, 0.0))
-            peak, deadline = 0.0, time.monotonic() + 60
+            peak, cruise, start, deadline = 0.0, [], None, time.monotonic() + 60
             while time.monotonic() < deadline:
                 m = recv(obs, "LOCAL_POSITION_NED", 5.0)
-                peak = max(peak, math.hypot(m.vx, m.vy))
+                speed = math.hypot(m.vx, m.vy)
+                peak = max(peak, speed)
+                start = start or (m.x, m.y)
+                done = math.hypot(m.x - start[0], m.y - start[1]) / math.hypot(-1.0 - start[0], 1.5 - start[1])
+                if 0.25 < done < 0.75:
+                    cruise.append(speed)
                 if math.hypot(m.y - 1.5, m.x + 1.0) < 0.15 and abs(-m.z - 2.0) < 0.15:
                     break
             else:
                 raise AssertionError("goto_location did not arrive")
-            results["goto_location"] += f" (peak horizontal speed {peak:.2f} m/s, MPC_XY_CRUISE 0.8)"
-            # the hilms rig overshoots the leg speed by ~20 % catching up with the virtual line: this leg
-            # peaked at 0.61 m/s with MPC_XY_CRUISE 0.5 and 0.97 with 0.8 (in-process, LiveRig.fly_path)
-            assert 0.75 < peak < 1.3, peak
+            cruise = sorted(cruise)[len(cruise) // 2]
+            results["goto_location"] += (f" (median horizontal speed mid-leg {cruise:.2f} m/s, peak {peak:.2f}, "
+                                         f"MPC_XY_CRUISE 0.8)")
+            # the leg's speed, not its peak: the peak adds the rig's catch-up with the virtual line and
+            # whatever swing the take-off left, which vary with when the command arrives
+            assert 0.6 < cruise < 1.0, (cruise, peak)
             act("set_current_speed(1.0)", lambda: action.set_current_speed(1.0))
             act("hold", action.hold)
             act("return_to_launch", action.return_to_launch)

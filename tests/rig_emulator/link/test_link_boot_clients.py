@@ -69,9 +69,15 @@ def test_mavproxy_waits_out_a_slow_start(tmp_path):
             assert got is not None, "".join(out.all)
             assert int(got.group(1)) == len(ParamTable())
             assert rig.ready or rig.wait_ready(30) is None
-            proc.stdin.write("status ATTITUDE\n")
-            proc.stdin.flush()
-            assert out.wait_for(r"ATTITUDE \{time_boot_ms : \d+, roll : ", timeout=30) is not None, "".join(out.all)
+            # `status` lists the messages MAVProxy has received: right after the rig becomes ready the
+            # first ATTITUDE may still be on its way, so ask again until it is there
+            for _ in range(15):
+                proc.stdin.write("status ATTITUDE\n")
+                proc.stdin.flush()
+                if out.wait_for(r"ATTITUDE \{time_boot_ms : \d+, roll : ", timeout=2) is not None:
+                    break
+            else:
+                raise AssertionError("MAVProxy's `status ATTITUDE` never showed an ATTITUDE\n" + "".join(out.all))
             before_exit = "".join(out.all)
             proc.stdin.write("exit\n")
             proc.stdin.close()
