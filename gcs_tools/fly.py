@@ -155,6 +155,7 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
     hold = pos.copy()
     start_offboard(link, lambda: send_target(link, int(t * 1e3), hold))
     texts: list[str] = []  # the vehicle's STATUSTEXTs since OFFBOARD was entered
+    in_offboard = False  # a HEARTBEAT has shown OFFBOARD since it was entered
     for i, (target, radius) in enumerate(zip(pts, radii)):
         start, t0 = pos.copy(), t
         duration = leg_duration(*start, *target, speed, min_leg_time)
@@ -179,7 +180,9 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
                 continue
             pos, t = _position(msg), msg.time_boot_ms * 1e-3
             mode = vehicle_mode(link)
-            if mode is None or mode[0] == PX4_OFFBOARD:
+            if mode is None or mode[0] == PX4_OFFBOARD or not in_offboard:
+                # a vehicle may say OFFBOARD only in its next HEARTBEAT after the ACK (PX4: 1 Hz)
+                in_offboard = in_offboard or (mode is not None and mode[0] == PX4_OFFBOARD)
                 continue
             said = "".join(texts[-4:])  # a long text comes in chunks
             if OFFBOARD_LOSS_TEXT in said and resumes > 0:
@@ -188,6 +191,7 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
                     notice(f"the vehicle's offboard-loss failsafe took over ({said.strip()}): "
                            f"back to OFFBOARD at waypoint {i + 1}/{pts.shape[0]}")
                 texts.clear()
+                in_offboard = False
                 sp_now = sp_pos.copy()
                 start_offboard(link, lambda: send_target(link, int(t * 1e3), sp_now))
                 continue
