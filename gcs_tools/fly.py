@@ -102,12 +102,18 @@ def start_offboard(link: Link, send_setpoint, attempts: int = 3, timeout_s: floa
     raise OperationError(f"the vehicle refused OFFBOARD ({name}) with a set-point stream flowing")
 
 
-def vehicle_mode(link: Link) -> tuple[int, int] | None:
-    """(main, sub) PX4 mode of the vehicle's latest HEARTBEAT seen on the link (None before one)."""
+def vehicle_heartbeat(link: Link):
+    """The vehicle's latest HEARTBEAT seen on the link, whatever message was waited for (None before one)."""
     hb = link.conn.messages.get("HEARTBEAT")
     if hb is None or hb.get_srcSystem() != link.target_system or hb.type == M.MAV_TYPE_GCS:
         return None
-    return (hb.custom_mode >> 16) & 0xFF, (hb.custom_mode >> 24) & 0xFF
+    return hb
+
+
+def vehicle_mode(link: Link) -> tuple[int, int] | None:
+    """(main, sub) PX4 mode of the vehicle's latest HEARTBEAT seen on the link (None before one)."""
+    hb = vehicle_heartbeat(link)
+    return None if hb is None else ((hb.custom_mode >> 16) & 0xFF, (hb.custom_mode >> 24) & 0xFF)
 
 
 def last_statustext(link: Link) -> str:
@@ -179,24 +185,32 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
                 texts.append(str(msg.text))
                 continue
             pos, t = _position(msg), msg.time_boot_ms * 1e-3
+            hb = vehicle_heartbeat(link)
+            said = "".join(texts[-4:]).strip()  # a long text comes in chunks
+            if in_offboard and hb is not None and not hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED:
+                raise OperationError(f"the vehicle disarmed at waypoint {i + 1}/{pts.shape[0]}"
+                                     + (f": {said}" if said else ""))
             mode = vehicle_mode(link)
             if mode is None or mode[0] == PX4_OFFBOARD or not in_offboard:
                 # a vehicle may say OFFBOARD only in its next HEARTBEAT after the ACK (PX4: 1 Hz)
                 in_offboard = in_offboard or (mode is not None and mode[0] == PX4_OFFBOARD)
                 continue
-            said = "".join(texts[-4:])  # a long text comes in chunks
             if OFFBOARD_LOSS_TEXT in said and resumes > 0:
                 resumes -= 1
                 if notice is not None:
-                    notice(f"the vehicle's offboard-loss failsafe took over ({said.strip()}): "
+                    notice(f"the vehicle's offboard-loss failsafe took over ({said}): "
                            f"back to OFFBOARD at waypoint {i + 1}/{pts.shape[0]}")
                 texts.clear()
                 in_offboard = False
-                sp_now = sp_pos.copy()
-                start_offboard(link, lambda: send_target(link, int(t * 1e3), sp_now))
+                # the vehicle held where it was: OFFBOARD resumes there, and the leg starts again from
+                # there, not where its virtual line has got to meanwhile (a step of metres)
+                hold = pos.copy()
+                start_offboard(link, lambda: send_target(link, int(t * 1e3), hold))
+                start, t0 = pos.copy(), t
+                duration = leg_duration(*start, *target, speed, min_leg_time)
                 continue
             raise OperationError(f"the vehicle left OFFBOARD for {_mode_name(link)} at waypoint "
-                                 f"{i + 1}/{pts.shape[0]}" + (f": {said.strip()}" if said else ""))
+                                 f"{i + 1}/{pts.shape[0]}" + (f": {said}" if said else ""))
     return reached
 
 
