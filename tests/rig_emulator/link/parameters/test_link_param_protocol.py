@@ -47,7 +47,9 @@ def test_set_accepted_and_rejected(rig, client):
 
 
 def _fly_north(strategy_index: float | None) -> list[tuple[float, float]]:
-    """Arm, ask for 1 m north, and record (t, north) for 4 simulated seconds."""
+    """Arm, ask for 1 m north at 1 m up, and record (t, north) for 4 simulated seconds. In the air: on
+    the hardware rig a vehicle standing on the virtual ground keeps its place until its thrust lifts it
+    (sim.ground_contact), so a target on the ground would measure when it took off, not the strategy."""
     # one set-point, not a stream: a set-point timeout longer than the flight (PX4's 1 s default would hold)
     with RigThread(speedup=4.0, overrides={"offboard.loss_timeout": 30.0}) as rig:
         c = connect(rig.tcp_url)
@@ -56,7 +58,7 @@ def _fly_north(strategy_index: float | None) -> list[tuple[float, float]]:
             assert recv(c, "PARAM_VALUE").param_value == strategy_index
         assert command(c, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == M.MAV_RESULT_ACCEPTED
         assert start_offboard(c, lambda: c.mav.set_position_target_local_ned_send(
-            0, 1, 1, M.MAV_FRAME_LOCAL_NED, 0b0000_1101_1111_1000, 1.0, 0.0, 0.0, 0, 0, 0, 0, 0, 0, 0, 0)).result == 0
+            0, 1, 1, M.MAV_FRAME_LOCAL_NED, 0b0000_1101_1111_1000, 1.0, 0.0, -1.0, 0, 0, 0, 0, 0, 0, 0, 0)).result == 0
         target = recv(c, "POSITION_TARGET_LOCAL_NED", condition=lambda m: abs(m.x - 1.0) < 1e-6)
         assert target is not None
         hb = recv(c, "HEARTBEAT")
