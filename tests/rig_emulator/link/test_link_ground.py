@@ -105,7 +105,9 @@ def test_arming_from_the_hang_the_vehicle_stands_still_then_takes_off_from_home(
 def test_the_divergence_report_fires_once_above_the_threshold(flight):
     onboard, sim = flight.onboard[-1], flight.sim_state[-1]
     apart = math.dist(onboard[1:], sim[1:])
-    assert apart > 0.2  # the two vehicles parted in the take-off (the report was held off by EST_DIV_WARN)
+    # the two vehicles parted in the take-off (the report was held off by EST_DIV_WARN): by 0.09-0.4 m,
+    # depending on when in the rig's time the mission started; they part further as the hover goes on
+    assert apart > 0.05
     t_set = flight.t
     assert flight.param_set("EST_DIV_WARN", 0.5 * apart).param_value == pytest.approx(0.5 * apart, rel=1e-6)
     flight.fly(5.0)
