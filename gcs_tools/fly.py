@@ -28,6 +28,7 @@ from gcs_tools.errors import OperationError
 from gcs_tools.link import COMMAND_TIMEOUT_S, Link
 from protocol.dialect import mavlink as M
 from protocol.frames import enu_to_ned, ned_to_enu
+from protocol.px4_custom_mode import split_custom_mode
 from rig_emulator.guidance.waypoint_switching import leg_duration, line_setpoint, waypoint_reached
 
 POSITION_ONLY = (M.POSITION_TARGET_TYPEMASK_VX_IGNORE | M.POSITION_TARGET_TYPEMASK_VY_IGNORE
@@ -113,12 +114,7 @@ def vehicle_heartbeat(link: Link):
 def vehicle_mode(link: Link) -> tuple[int, int] | None:
     """(main, sub) PX4 mode of the vehicle's latest HEARTBEAT seen on the link (None before one)."""
     hb = vehicle_heartbeat(link)
-    return None if hb is None else ((hb.custom_mode >> 16) & 0xFF, (hb.custom_mode >> 24) & 0xFF)
-
-
-def last_statustext(link: Link) -> str:
-    st = link.conn.messages.get("STATUSTEXT")
-    return "" if st is None else str(st.text)
+    return None if hb is None else split_custom_mode(hb.custom_mode)
 
 
 def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_time: float = DEFAULT_MIN_LEG_TIME,
@@ -190,7 +186,7 @@ def fly(link: Link, points_enu, radii, speed: float = DEFAULT_SPEED, min_leg_tim
             if in_offboard and hb is not None and not hb.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED:
                 raise OperationError(f"the vehicle disarmed at waypoint {i + 1}/{pts.shape[0]}"
                                      + (f": {said}" if said else ""))
-            mode = vehicle_mode(link)
+            mode = None if hb is None else split_custom_mode(hb.custom_mode)
             if mode is None or mode[0] == PX4_OFFBOARD or not in_offboard:
                 # a vehicle may say OFFBOARD only in its next HEARTBEAT after the ACK (PX4: 1 Hz)
                 in_offboard = in_offboard or (mode is not None and mode[0] == PX4_OFFBOARD)

@@ -25,6 +25,8 @@ from __future__ import annotations
 from MAVProxy.modules.lib import mp_module
 from pymavlink import mavutil
 
+from protocol.px4_custom_mode import split_custom_mode
+
 
 def px4_mode_triple(arg: str):
     """(base_mode, main_mode, sub_mode) of a PX4 mode name (pymavlink's px4_map, any case) or of a
@@ -33,8 +35,7 @@ def px4_mode_triple(arg: str):
     if name in mavutil.px4_map:
         return tuple(int(v) for v in mavutil.px4_map[name])
     if arg.isdigit():
-        custom = int(arg)
-        return (int(mavutil.mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), (custom >> 16) & 0xFF, (custom >> 24) & 0xFF)
+        return (int(mavutil.mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), *split_custom_mode(int(arg)))
     return None
 
 

@@ -25,6 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+from protocol.px4_custom_mode import custom_mode, split_custom_mode  # noqa: F401 - the rig's names for them
+
 MANUAL, ALTCTL, POSCTL, AUTO, ACRO, OFFBOARD, STABILIZED, RATTITUDE = 1, 2, 3, 4, 5, 6, 7, 8
 AUTO_READY, AUTO_TAKEOFF, AUTO_LOITER, AUTO_MISSION, AUTO_RTL, AUTO_LAND = 1, 2, 3, 4, 5, 6
 AUTO_RTGS, AUTO_FOLLOW_TARGET, AUTO_PRECLAND = 7, 8, 9
@@ -67,15 +69,6 @@ MODES: dict[tuple[int, int], Mode] = {
                                 refusal="AUTO.PRECLAND needs a landing-target sensor, which the rig has not"),
 }
 MODE_NAMES = {key: m.name for key, m in MODES.items()}
-
-
-def custom_mode(main: int, sub: int) -> int:
-    """PX4's packing of a (main, sub) mode into HEARTBEAT.custom_mode."""
-    return (main << 16) | (sub << 24)
-
-
-def split_custom_mode(value: int) -> tuple[int, int]:
-    return (value >> 16) & 0xFF, (value >> 24) & 0xFF
 
 
 class FlightModes:
