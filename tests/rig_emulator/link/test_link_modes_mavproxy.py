@@ -123,7 +123,11 @@ def test_mavproxy_modes_takeoff_guided_rtl_land(tmp_path):
             assert abs(e - 1.0) < 0.15 and abs(n - 1.0) < 0.15 and abs(u - 2.0) < 0.15
             results["guided LAT LON 2"] = f"flew to E {e:.2f} N {n:.2f} U {u:.2f}"
             send("long NAV_RETURN_TO_LAUNCH")
+            mark = len(out.all)
             assert out.wait_for(r"landed: disarmed", timeout=90) is not None
+            # the operator's cue to arm again: MAVProxy has seen a disarmed HEARTBEAT (it prints
+            # "ARMED" only on a change it saw, so an arm sent before that would never print it)
+            assert out.seen_or_wait(r"\bDISARMED\b", mark, timeout=20) is not None, out.transcript(20)
             e, n, u = _position(obs)
             assert abs(e) < 0.15 and abs(n) < 0.15 and u < 0.1
             results["long NAV_RETURN_TO_LAUNCH"] = f"returned and landed at E {e:.2f} N {n:.2f}, disarmed"

@@ -214,7 +214,10 @@ def test_fence_holds_under_a_setpoint_stream_and_fence_status_is_true():
         assert recv_text(watch, lambda t: t.startswith("fence"), timeout=10.0)[1] == "fence: back inside"
         fs = _fence_status(conn)
         assert (fs.breach_status, fs.breach_count) == (0, 1)
-        # out again: a second breach, counted, held again
+        # out again: a second breach, counted, held again. OFFBOARD asked for again: the pauses of the
+        # stream above (reading the texts and FENCE_STATUS) may outlast COM_OF_LOSS_T (1 s of rig time,
+        # 50 ms of wall time at 20x) on a busy machine, and then the offboard-loss hold has taken over
+        assert start_offboard(conn, lambda: _local(conn, 20.0, 0.0, -2.5)).result == ACCEPTED
         far, now = _stream_for(conn, 25.0, 20.0, 0.0, -2.5)
         assert far < 10.0 and now < 9.0, (far, now)
         fs = _fence_status(conn)
