@@ -8,7 +8,11 @@ Three kinds:
 * OFB_KIND_POSITION: per world axis a position, velocity and acceleration, each NaN when
   not given. As in PX4's trajectory set-points a NaN is "not controlled": a velocity alone
   is velocity control, an acceleration alone is acceleration control, a position with no
-  velocity holds it (velocity reference 0). Heading: the yaw when given, else the heading
+  velocity holds it (velocity reference 0). A velocity alone is flown as PX4 flies it, with no
+  steady error: the position reference of that axis is the track the velocity carries from
+  OFB_POS0 (where the track stood when the set-point arrived, see
+  :meth:`~rig_emulator.simulation.live.LiveRig.set_offboard_setpoint`), so the paper's position
+  laws, which have no integral term, see the error a lag builds up and close it. Heading: the yaw when given, else the heading
   at the set-point's time turning at the yaw rate (NaN rate: held).
 * OFB_KIND_ATTITUDE: paper Euler angles, Euler-angle rate feed-forward, and a collective
   thrust (N, NaN = hover thrust m g).
@@ -45,7 +49,11 @@ OFB_YAW0 = 13  # paper psi at that time (rad)
 OFB_ATT = 14  # 3: paper phi, theta, psi (rad) for OFB_KIND_ATTITUDE
 OFB_RATE = 17  # 3: Euler-angle rate feed-forward (attitude) or body rates FRD (rates), rad/s
 OFB_THRUST = 20  # collective thrust (N), NaN = hover thrust
-OFB_SIZE = 21
+OFB_POS0 = 21  # 3: a velocity-only axis' position track at OFB_T0, world ENU (m); NaN = pure velocity error
+OFB_SIZE = 24
+#: How far a velocity track may lead the vehicle (m) when a new set-point carries it on: a vehicle held
+#: back (on the ground, at a fence, at its thrust limit) does not wind the track up beyond this
+VELOCITY_TRACK_LEAD_M = 1.0
 
 OFB_KIND_POSITION = 0.0
 OFB_KIND_ATTITUDE = 1.0
@@ -69,6 +77,8 @@ def offboard_references(t, ofb, ref):
             p = ofb[OFB_POS + k]
             v = ofb[OFB_VEL + k]
             a = ofb[OFB_ACC + k]
+            if math.isnan(p) and not math.isnan(v):  # velocity control: the track it carries
+                p = ofb[OFB_POS0 + k] + v * (t - ofb[OFB_T0])
             ref[REF_POS + k] = p
             ref[REF_VEL + k] = 0.0 if (math.isnan(v) and not math.isnan(p)) else v
             ref[REF_ACC + k] = a

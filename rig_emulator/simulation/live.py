@@ -17,7 +17,7 @@ from rig_emulator.control.controller import (CS_TEST_UNTIL, CS_TEST_V, OUT_ATT_D
                                              OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL, REF_YAW)
 from rig_emulator.guidance.offboard import (OFB_ATT, OFB_ACC, OFB_KIND, OFB_KIND_ATTITUDE, OFB_KIND_POSITION,
                                             OFB_KIND_RATES, OFB_POS, OFB_RATE, OFB_SIZE, OFB_T0, OFB_THRUST, OFB_VEL,
-                                            OFB_YAW, OFB_YAW0, OFB_YAW_RATE)
+                                            OFB_YAW, OFB_YAW0, OFB_YAW_RATE, OFB_POS0, VELOCITY_TRACK_LEAD_M)
 from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, OFFBOARD,
                                           WAYPOINTS, start_at)
 from rig_emulator._jit import jit
@@ -583,7 +583,28 @@ class LiveRig:
         ofb[OFB_YAW] = np.nan if yaw is None else float(yaw)
         ofb[OFB_YAW_RATE] = np.nan if yaw_rate is None else float(yaw_rate)
         ofb[OFB_YAW0] = self._current_heading()
+        ofb[OFB_POS0:OFB_POS0 + 3] = self._velocity_track_start(ofb)
         self.sim.gp = self.sim.gp._replace(gtype=OFFBOARD, offboard=ofb)
+
+    def _velocity_track_start(self, ofb) -> np.ndarray:
+        """OFB_POS0 of a new position-kind set-point: on each velocity-only axis, where the live
+        set-point's velocity track stands now (a stream of velocity set-points carries one track on,
+        as PX4's velocity integrator does), within VELOCITY_TRACK_LEAD_M of the vehicle; where no
+        track is flown on that axis, the vehicle's position as its controllers fly it. NaN elsewhere."""
+        start = np.full(3, np.nan)
+        free = np.isnan(ofb[OFB_POS:OFB_POS + 3]) & ~np.isnan(ofb[OFB_VEL:OFB_VEL + 3])
+        if not free.any():
+            return start
+        here = self.position_now()
+        live = self.sim.gp.offboard
+        flying = self.sim.gp.gtype == OFFBOARD and live[OFB_KIND] == OFB_KIND_POSITION
+        for k in np.flatnonzero(free):
+            track = math.nan
+            if flying and math.isnan(live[OFB_POS + k]) and not math.isnan(live[OFB_VEL + k]):
+                track = live[OFB_POS0 + k] + live[OFB_VEL + k] * (self.sim.time - live[OFB_T0])
+            start[k] = here[k] if math.isnan(track) else min(max(track, here[k] - VELOCITY_TRACK_LEAD_M),
+                                                               here[k] + VELOCITY_TRACK_LEAD_M)
+        return start
 
     def set_body_rate_target(self, rates_frd, thrust_fraction: float | None = None) -> None:
         """Rate mode: track body rates (omega_B, FRD, rad/s) with a collective thrust (a fraction

@@ -62,8 +62,12 @@ def test_velocity_climb_then_body_offset_position(link):
     rig, conn = link
     climb = lambda: local(conn, M.MAV_FRAME_LOCAL_NED, POS | ACC | YAW | RATE, v=(0, 0, -0.4))  # noqa: E731
     assert start_offboard(conn, climb).result == M.MAV_RESULT_ACCEPTED
-    last = hold_for(conn, 4.0, climb)
-    assert -last.z > 1.0 and abs(last.vz + 0.4) < 0.15, last  # climbing at about 0.4 m/s
+    mid = hold_for(conn, 2.0, climb)
+    last = hold_for(conn, 2.0, climb)
+    # climbing at 0.4 m/s: judged on the climb over 2 s (a single LOCAL_POSITION_NED.vz of the hardware
+    # rig scatters by up to 0.25 m/s about it)
+    rate = (mid.z - last.z) / ((last.time_boot_ms - mid.time_boot_ms) * 1e-3)
+    assert -last.z > 1.0 and abs(rate - 0.4) < 0.06, (rate, last)
     assert mode_of(conn)[0] == OFFBOARD
     assert rig.server.counters.dropped.get("setpoint_refused", 0) == 0
     # one BODY_OFFSET_NED set-point: 1 m forward of where the rig is (forward = its heading), same height
