@@ -48,7 +48,9 @@ for the host CPU). :meth:`JobResult.digest` fingerprints a result for such compa
 
 Errors: every job's configuration is validated before anything runs (a
 :class:`~rig_emulator.config.loader.ConfigError` names the job and the key); a job that
-raises while running stops the sweep with :class:`JobFailed` naming it.
+raises while running stops the sweep with :class:`JobFailed` naming it, or, with
+``keep_failed=True``, takes that :class:`JobFailed` as its result and the sweep goes on (a
+comparison that reports a controller's failure on one experiment and measures the others).
 """
 
 from __future__ import annotations
@@ -228,6 +230,14 @@ def run_job(job: SimJob, reduce: Callable | None = None):
     return (reduce or job_result)(job, sim)
 
 
+def _run_job_kept(job: SimJob, reduce: Callable | None = None):
+    """:func:`run_job`, its :class:`JobFailed` returned instead of raised (``keep_failed``)."""
+    try:
+        return run_job(job, reduce)
+    except JobFailed as exc:
+        return exc
+
+
 def _mp_context():
     # spawn, not fork (the caller may run threads) nor forkserver (its workers would not be this
     # process's children)
@@ -259,8 +269,9 @@ def _worker_pid() -> int:
     return os.getpid()
 
 
-def _run_batch(jobs, reduce):
-    return [run_job(job, reduce) for job in jobs]
+def _run_batch(jobs, reduce, keep_failed=False):
+    one = _run_job_kept if keep_failed else run_job
+    return [one(job, reduce) for job in jobs]
 
 
 class SweepPool:
@@ -310,12 +321,13 @@ class SweepPool:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def run(self, jobs: Sequence[SimJob], progress: Progress | None = None, reduce: Callable | None = None) -> list:
-        """Run validated ``jobs`` on the workers; results in job order."""
+    def run(self, jobs: Sequence[SimJob], progress: Progress | None = None, reduce: Callable | None = None,
+            keep_failed: bool = False) -> list:
+        """Run validated ``jobs`` on the workers; results in job order (``keep_failed``: see :func:`run_jobs`)."""
         if not self._lock.acquire(blocking=False):
             raise RuntimeError("a sweep is already running on this SweepPool")
         try:
-            return self._run(list(jobs), progress, reduce)
+            return self._run(list(jobs), progress, reduce, keep_failed)
         finally:
             self._lock.release()
 
@@ -324,7 +336,7 @@ class SweepPool:
         cap = max(1, int(BATCH_RIG_SECONDS // job.duration)) if job.duration else 1
         return max(1, min(guided, cap))
 
-    def _run(self, jobs: list, progress, reduce) -> list:
+    def _run(self, jobs: list, progress, reduce, keep_failed: bool = False) -> list:
         results: list = [None] * len(jobs)
         pending: dict = {}  # future -> first job index of its batch
         nxt = done_count = 0
@@ -334,7 +346,7 @@ class SweepPool:
                 while nxt < len(jobs) and len(pending) < 2 * self.workers:
                     size = self._batch_size(len(jobs) - nxt, jobs[nxt])
                     try:
-                        fut = self._executor.submit(_run_batch, jobs[nxt:nxt + size], reduce)
+                        fut = self._executor.submit(_run_batch, jobs[nxt:nxt + size], reduce, keep_failed)
                     except BrokenProcessPool as exc:
                         raise self._died(jobs[nxt], exc) from exc
                     pending[fut] = nxt
@@ -368,7 +380,7 @@ _shared: SweepPool | None = None
 _shared_lock = threading.Lock()
 
 
-def _run_shared(jobs: list, workers: int, progress, reduce) -> list:
+def _run_shared(jobs: list, workers: int, progress, reduce, keep_failed: bool = False) -> list:
     """Run on the shared pool; when another thread's sweep holds it, on a pool of this call's
     own (as before pools were kept), never closing a pool that is running a sweep."""
     global _shared
@@ -382,9 +394,9 @@ def _run_shared(jobs: list, workers: int, progress, reduce) -> list:
         claimed = pool.workers == workers and not pool.broken and pool._lock.acquire(blocking=False)
     if not claimed:
         with SweepPool(workers) as own:
-            return own.run(jobs, progress, reduce)
+            return own.run(jobs, progress, reduce, keep_failed)
     try:
-        return pool._run(jobs, progress, reduce)
+        return pool._run(jobs, progress, reduce, keep_failed)
     finally:
         pool._lock.release()
 
@@ -405,8 +417,13 @@ atexit.register(shutdown_pool)
 
 def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: Any = None,
              progress: Progress | None = None, reduce: Callable | None = None,
-             pool: SweepPool | None = None) -> list:
+             pool: SweepPool | None = None, keep_failed: bool = False) -> list:
     """Run ``jobs`` and return their results in job order (see the module docstring).
+
+    A job that raises while running stops the sweep with :class:`JobFailed`; with ``keep_failed``
+    its :class:`JobFailed` stands in its result's place and the other jobs run on. Bad
+    configurations (:class:`~rig_emulator.config.loader.ConfigError`) and a worker that dies
+    stop the sweep either way.
 
     ``progress(done, total, job)`` is called in the calling process after each job finishes
     (in completion order). ``workers`` caps the local processes (default ``os.cpu_count()``);
@@ -423,21 +440,21 @@ def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: A
     if not jobs:
         return []
     if scheduler is not None:
-        return _run_dask(jobs, scheduler, progress, reduce)
+        return _run_dask(jobs, scheduler, progress, reduce, keep_failed)
     if pool is not None:
-        return pool.run(jobs, progress, reduce)
+        return pool.run(jobs, progress, reduce, keep_failed)
     n = workers or os.cpu_count() or 1
     if n == 1 or len(jobs) == 1:
         out = []
         for k, job in enumerate(jobs):
-            out.append(run_job(job, reduce))
+            out.append((_run_job_kept if keep_failed else run_job)(job, reduce))
             if progress is not None:
                 progress(k + 1, len(jobs), job)
         return out
-    return _run_shared(jobs, n, progress, reduce)
+    return _run_shared(jobs, n, progress, reduce, keep_failed)
 
 
-def _run_dask(jobs, scheduler, progress, reduce) -> list:
+def _run_dask(jobs, scheduler, progress, reduce, keep_failed: bool = False) -> list:
     try:
         from distributed import Client, as_completed
     except ImportError:
@@ -445,7 +462,7 @@ def _run_dask(jobs, scheduler, progress, reduce) -> list:
     own = not isinstance(scheduler, Client)
     client = Client(scheduler, timeout="30s") if own else scheduler
     try:
-        futures = client.map(run_job, jobs, reduce=reduce, pure=False)
+        futures = client.map(_run_job_kept if keep_failed else run_job, jobs, reduce=reduce, pure=False)
         index = {f.key: k for k, f in enumerate(futures)}
         results: list = [None] * len(jobs)
         for done_count, fut in enumerate(as_completed(futures), start=1):

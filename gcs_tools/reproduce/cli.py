@@ -7,6 +7,7 @@ Registered in :mod:`gcs_tools.cli` by :func:`add_parser`. Exit codes: 0 report w
 from __future__ import annotations
 
 import json
+import sys
 import time
 
 from gcs_tools.arg_types import whole_number_at_least
@@ -100,10 +101,13 @@ def cmd_reproduce(args) -> int:
     from gcs_tools.reproduce.plants import count, verdicts
 
     if args.controller:
-        from gcs_tools.reproduce.compare_report import summary_lines
+        from gcs_tools.reproduce.compare_report import raised, summary_lines
 
         for line in summary_lines(outcome.columns, ",".join(args.controller)):
             print(line)
+        for plant, who, seed, text in raised(outcome.columns):
+            print(f"warning: {who} raised on {plant}, seed {seed}, {text} (a failed run in the report)",
+                  file=sys.stderr)
     for col in outcome.columns if not args.controller else []:
         k = count(col)
         print(f"{col.label}: {k['reproduced']} of {sum(k.values())} claims reproduced, {k['partly reproduced']} "

@@ -8,7 +8,7 @@ scenarios, seeds and plants, and compares them metric by metric:
 * :func:`jobs` - every controller's headless runs of one (plant, seed);
 * :func:`metrics` - each experiment's metrics per controller from those runs (lower is better
   unless :class:`Metric` says otherwise; ``inf`` where the run failed: diverged, never settled,
-  never reached the last waypoint);
+  never reached the last waypoint, or the plug-in raised, whose error is kept under ``raised``);
 * :func:`verdict` - better / worse / same, over the seeds (the rule is :data:`RULE`).
 
 The report (:mod:`gcs_tools.reproduce.compare_report`) and the figures
@@ -25,7 +25,7 @@ import numpy as np
 from gcs_tools.reproduce import exp_harmonic, exp_helix, exp_masses, exp_rectangle, exp_shocks, exp_sweep, paper_data
 from gcs_tools.reproduce.experiment import Context
 from gcs_tools.reproduce.metrics import hf_rms, window_mean_abs
-from rig_emulator.sweep import SimJob
+from rig_emulator.sweep import JobFailed, SimJob
 
 #: The paper's four controllers (the built-in strategies), in the order the tables list them.
 PAPER_CONTROLLERS = ("smc", "flc", "smc-flc", "pid")
@@ -229,9 +229,24 @@ _SUMMARY = {"shocks": _shocks, "harmonic": _harm, "sweep": _sweep, "masses": _ma
             "rectangle": _rectangle}
 
 
+def failed_metrics(exp: str, failures: list) -> dict:
+    """An experiment's metrics for a controller whose run(s) raised: every metric a failed run (``inf``),
+    and ``raised``, each error with the run it stopped."""
+    out = {m.key: math.inf for m in METRICS[exp]}
+    parts = [f.job.label.split("/") for f in failures]  # controller/EXP/WHO[/VARIANT]
+    out["raised"] = ["/".join([p[1], *p[3:]]) + f": {f.message}" for p, f in zip(parts, failures)]
+    return out
+
+
 def metrics(results: list) -> dict:
-    """{experiment: {controller: {metric: value}}} of one (plant, seed)'s runs."""
-    return {exp: {who: _SUMMARY[exp](rs) for who, rs in by.items()} for exp, by in split(results).items()}
+    """{experiment: {controller: {metric: value}}} of one (plant, seed)'s runs; a :class:`JobFailed`
+    among them (``run_jobs(keep_failed=True)``) fails its controller's whole experiment."""
+    out: dict = {}
+    for exp, by in split(results).items():
+        for who, rs in by.items():
+            bad = [r for r in rs if isinstance(r, JobFailed)]
+            out.setdefault(exp, {})[who] = failed_metrics(exp, bad) if bad else _SUMMARY[exp](rs)
+    return out
 
 
 # --- over the seeds -------------------------------------------------------------------------------------------

@@ -62,6 +62,17 @@ def _exps(columns) -> list:
     return [e for e in compare.EXPERIMENTS if e in seen]
 
 
+def raised(columns) -> list[tuple[str, str, int, str]]:
+    """(plant, plug-in, seed, "experiment[/variant]: error") of every plug-in run that raised."""
+    out = []
+    for c in columns:
+        for seed, m in _per_seed(c).items():
+            for exp in compare.EXPERIMENTS:
+                for who, x in m.get(exp, {}).items():
+                    out += [(c.label, who, seed, text) for text in x.get("raised", ())]
+    return out
+
+
 def verdicts(column, spec: str) -> dict:
     """{plug-in: {paper controller: {(exp, metric key): verdict}}} on one plant."""
     out = {}
@@ -172,6 +183,15 @@ def render(sections, seed: int, quick: bool, columns, n_seeds: int, spec: str, s
               "(masses held, waypoints reached). A verdict compares your controller with one of the paper's on one "
               "metric and plant: " + compare.RULE + " In brackets: your mean as a multiple of theirs (the counts "
               "side by side).", ""]
+    errors = raised(columns)
+    if errors:
+        lines += ["## Runs that raised", "",
+                  "These runs stopped with an error of the controller. Each counts as a failed run of its "
+                  "experiment, on that plant and seed, in the tables and verdicts below; the other experiments "
+                  "were flown and compared as usual.", ""]
+        lines += [f"- **{compare.label(who, spec)} (yours)** on `{plant}`, seed {s}, {text}"
+                  for plant, who, s, text in errors]
+        lines.append("")
     lines += ["## Verdicts", ""]
     for c in columns:
         v = verdicts(c, spec)
@@ -271,7 +291,8 @@ def results_part(columns, spec: str) -> dict:
     """``results.json``'s ``comparison``: every metric per plant, experiment and controller over the seeds
     (per-seed values and their spread) and the verdicts."""
     out = {"rule": compare.RULE, "plugins": compare.plugins(spec), "paper_controllers": list(compare.PAPER_CONTROLLERS),
-           "plants": {}}
+           "plants": {}, "raised": [{"plant": p, "controller": who, "seed": s, "run": text}
+                                    for p, who, s, text in raised(columns)]}
     for c in columns:
         seeds = sorted(_per_seed(c))
         tabs = {}

@@ -31,6 +31,7 @@ class Outcome:
     jobs: int  # headless runs
     sim_seconds: float  # simulated seconds of the headless runs
     columns: list = None  # PlantRuns per plant (every seed's sections)
+    failures: list = None  # JobFailed of the plug-in runs that raised (--controller), job order
 
 
 def select(only) -> tuple[list, bool]:
@@ -190,7 +191,8 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
         if not jobs:
             start_live()
         try:
-            results = run_jobs(jobs, workers=workers, scheduler=scheduler, progress=on_job)
+            # a plug-in's run that raises is a failed run of the comparison, not the end of it
+            results = run_jobs(jobs, workers=workers, scheduler=scheduler, progress=on_job, keep_failed=bool(controller))
         except (JobFailed, ConfigError) as exc:
             raise OperationError(str(exc) + _plugin_hint(exc, compared)) from None
         except OSError as exc:  # e.g. a Dask scheduler that cannot be reached
@@ -210,6 +212,10 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
             if isinstance(t.error, (OperationError, UsageError)):
                 raise t.error
             raise OperationError(f"{t.exp.NAME}: {type(t.error).__name__}: {t.error}") from t.error
+    failures = [r for r in results if isinstance(r, JobFailed)]
+    for f in failures:
+        if not f.job.controller:  # a paper controller's run: the emulator's fault, not the comparison's
+            raise OperationError(str(f))
     flown = {t.exp.NAME: t.result for t in threads}
     by_ctx = []
     for i, ctx in enumerate(contexts):
@@ -238,5 +244,5 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
                          controller=controller, strategy=strategy)
     files += [out / name for s in sections for name in s.figures]
     files += [c.out_dir / name for i, c in enumerate(contexts) if i > 0 for s in by_ctx[i] for name in s.figures]
-    return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results),
-                   columns=columns)
+    return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results if not isinstance(r, JobFailed)),
+                   columns=columns, failures=failures)

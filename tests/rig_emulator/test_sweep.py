@@ -182,3 +182,17 @@ def test_sweeps_from_two_threads_at_once_both_complete():
         t.join(120)
     assert not errors and got == {0: expected, 1: expected}
     sweep.shutdown_pool()
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_keep_failed_puts_a_raising_job_failure_in_its_place_and_runs_the_rest(workers):
+    from rig_emulator.sweep import JobFailed
+
+    raises = SimJob("hover", seed=1, duration=4.0, columns=(), label="raises",
+                    controller="tests.rig_emulator.controllers.test_plugin_errors:RaisesAt3")
+    fine = [SimJob("hover", "pid", seed=1, duration=0.2, columns=(), label=str(k)) for k in range(2)]
+    with pytest.raises(JobFailed, match="raises.*my gain schedule divided by zero"):
+        run_jobs([fine[0], raises, fine[1]], workers=workers)
+    got = run_jobs([fine[0], raises, fine[1]], workers=workers, keep_failed=True)
+    assert isinstance(got[1], JobFailed) and got[1].job == raises and "divided by zero" in got[1].message
+    assert [r.digest() for r in (got[0], got[2])] == [r.digest() for r in run_jobs(fine, workers=1)]
