@@ -160,17 +160,26 @@ def command(conn, cmd: int, *params, target=(1, 1), confirmation=0, timeout=10.0
     return recv(conn, "COMMAND_ACK", timeout, lambda m: m.command == cmd)
 
 
-def start_offboard(conn, send_setpoint, target=(1, 1), timeout=10.0):
+def start_offboard(conn, send_setpoint, target=(1, 1), timeout=10.0, period_s=0.02):
     """PX4's offboard start, as MAVSDK's ``offboard.start()`` does it: a set-point first
-    (``send_setpoint()``; the stream must already flow), then DO_SET_MODE OFFBOARD. Returns the
-    COMMAND_ACK (None on timeout)."""
+    (``send_setpoint()``; the stream must already flow), then DO_SET_MODE OFFBOARD, the stream
+    kept up (every ``period_s`` of wall time) until the answer: a rig far faster than real time
+    that enters OFFBOARD before this client has read its backlog would otherwise see the stream
+    stop and hold (COM_OF_LOSS_T). Returns the COMMAND_ACK (None on timeout)."""
     from protocol.dialect import mavlink as M
 
     ack = None
     for _ in range(3):  # a refusal (the set-point judged stale by a rig running far faster than real time) retries
         send_setpoint()
-        ack = command(conn, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 6, 0, target=target,
-                      timeout=timeout)
+        p = [M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 6, 0] + [NAN] * 4
+        conn.mav.command_long_send(target[0], target[1], M.MAV_CMD_DO_SET_MODE, 0, *p)
+        ack, deadline = None, time.monotonic() + timeout
+        while ack is None and time.monotonic() < deadline:
+            m = conn.recv_match(type="COMMAND_ACK", blocking=True, timeout=period_s)
+            if m is not None and m.command == M.MAV_CMD_DO_SET_MODE:
+                ack = m
+            else:
+                send_setpoint()
         if ack is None or ack.result != M.MAV_RESULT_DENIED:
             break
     return ack

@@ -6,9 +6,11 @@ FENCE_STATUS, far mission items refused for the fence (not for the Earth's curva
 refusals on every link, and a ground tool that keeps the rig's ground-station link alive.
 
 Every wait is judged on the rig's own time stamps (simulated time); the wall-clock timeouts
-are only guards against a hung rig."""
+are only guards against a hung rig. A set-point stream also has a wall-clock floor (a client
+keeping its stream alive, as MAVSDK does), never a judgement."""
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -174,15 +176,20 @@ def _fence_status(conn):
 
 
 def _stream_for(conn, seconds, n, e, d):
-    """Set-points at 10 Hz of simulated time for ``seconds``; returns the farthest horizontal distance seen."""
+    """Set-points at 10 Hz of simulated time for ``seconds``, and at least every 20 ms of wall time
+    (0.4 s of rig time at 20x): the stamps read are the rig's clock as this client has caught up
+    with it, and a client that falls behind a rig in its own process would space its set-points
+    past COM_OF_LOSS_T by them alone. Returns the farthest horizontal distance seen."""
     far = 0.0
     m = recv(conn, "LOCAL_POSITION_NED", 10.0)
     t0 = t_next = m.time_boot_ms * 1e-3
     t = t0
+    sent = 0.0
     while t - t0 < seconds:
-        if t >= t_next:
+        if t >= t_next or time.monotonic() - sent > 0.02:
             _local(conn, n, e, d)
-            t_next += 0.1
+            sent = time.monotonic()
+            t_next = max(t_next + 0.1, t) if t >= t_next else t_next
         m = recv(conn, "LOCAL_POSITION_NED", 10.0)
         t = m.time_boot_ms * 1e-3
         far = max(far, math.hypot(m.x, m.y))
