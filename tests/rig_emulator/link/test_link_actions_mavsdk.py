@@ -77,11 +77,13 @@ def test_mavsdk_actions_fly_the_rig():
             assert param.get_param_float("MPC_XY_CRUISE") == pytest.approx(CRUISE)
             results[f"param.set_param_float('MPC_XY_CRUISE', {CRUISE:g})"] = f"Success (read back {CRUISE:.2f})"
             act("goto_location", lambda: action.goto_location(lat, lon, alt, 0.0))
-            peak, start, deadline = 0.0, None, time.monotonic() + 60
+            peak, first, start, deadline = 0.0, None, None, time.monotonic() + 60
             while time.monotonic() < deadline:
                 m = recv(obs, "LOCAL_POSITION_NED", 5.0)
                 peak = max(peak, math.hypot(m.vx, m.vy))
-                start = start or (m.x, m.y, m.time_boot_ms * 1e-3)
+                first = first or (m.x, m.y)
+                if start is None and math.hypot(m.x - first[0], m.y - first[1]) > 0.05:  # the leg has begun
+                    start = (m.x, m.y, m.time_boot_ms * 1e-3)
                 if math.hypot(m.y - 1.5, m.x + 1.0) < 0.15 and abs(-m.z - 2.0) < 0.15:
                     break
             else:
@@ -90,10 +92,10 @@ def test_mavsdk_actions_fly_the_rig():
             mean = leg_m / leg_s
             results["goto_location"] += (f" ({leg_m:.2f} m in {leg_s:.1f} s simulated: {mean:.2f} m/s on average, "
                                          f"peak {peak:.2f}, MPC_XY_CRUISE {CRUISE:g})")
-            # the leg's mean speed in simulated time, not a sample of it: the rig's catch-up with the
-            # virtual line and the swing the take-off left vary with when the command arrives, the leg's
-            # duration barely (the preset's 0.5 m/s would take 3.6 s or more)
-            assert 0.55 < mean < 0.9, (leg_m, leg_s, peak)
+            # the leg's mean speed in simulated time, from its first 5 cm to the arrival, not a sample of
+            # it: the rig's catch-up with the virtual line and the swing the take-off left vary with when
+            # the command arrives, the leg's duration barely (the preset's 0.5 m/s would take 3.6 s or more)
+            assert 0.6 < mean < 1.0, (leg_m, leg_s, peak)  # 0.79-0.83 measured; 0.5 at the preset
             act("set_current_speed(1.0)", lambda: action.set_current_speed(1.0))
             act("hold", action.hold)
             act("return_to_launch", action.return_to_launch)
