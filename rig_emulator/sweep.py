@@ -238,6 +238,11 @@ def _run_job_kept(job: SimJob, reduce: Callable | None = None):
         return exc
 
 
+def _job_runner(keep_failed: bool) -> Callable:
+    """What runs one job, where it runs: :func:`run_job`, or with ``keep_failed`` :func:`_run_job_kept`."""
+    return _run_job_kept if keep_failed else run_job
+
+
 def _mp_context():
     # spawn, not fork (the caller may run threads) nor forkserver (its workers would not be this
     # process's children)
@@ -270,7 +275,7 @@ def _worker_pid() -> int:
 
 
 def _run_batch(jobs, reduce, keep_failed=False):
-    one = _run_job_kept if keep_failed else run_job
+    one = _job_runner(keep_failed)
     return [one(job, reduce) for job in jobs]
 
 
@@ -447,7 +452,7 @@ def run_jobs(jobs: Sequence[SimJob], *, workers: int | None = None, scheduler: A
     if n == 1 or len(jobs) == 1:
         out = []
         for k, job in enumerate(jobs):
-            out.append((_run_job_kept if keep_failed else run_job)(job, reduce))
+            out.append(_job_runner(keep_failed)(job, reduce))
             if progress is not None:
                 progress(k + 1, len(jobs), job)
         return out
@@ -462,7 +467,7 @@ def _run_dask(jobs, scheduler, progress, reduce, keep_failed: bool = False) -> l
     own = not isinstance(scheduler, Client)
     client = Client(scheduler, timeout="30s") if own else scheduler
     try:
-        futures = client.map(_run_job_kept if keep_failed else run_job, jobs, reduce=reduce, pure=False)
+        futures = client.map(_job_runner(keep_failed), jobs, reduce=reduce, pure=False)
         index = {f.key: k for k, f in enumerate(futures)}
         results: list = [None] * len(jobs)
         for done_count, fut in enumerate(as_completed(futures), start=1):

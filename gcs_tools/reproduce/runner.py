@@ -31,7 +31,6 @@ class Outcome:
     jobs: int  # headless runs
     sim_seconds: float  # simulated seconds of the headless runs
     columns: list = None  # PlantRuns per plant (every seed's sections)
-    failures: list = None  # JobFailed of the plug-in runs that raised (--controller), job order
 
 
 def select(only) -> tuple[list, bool]:
@@ -212,8 +211,8 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
             if isinstance(t.error, (OperationError, UsageError)):
                 raise t.error
             raise OperationError(f"{t.exp.NAME}: {type(t.error).__name__}: {t.error}") from t.error
-    failures = [r for r in results if isinstance(r, JobFailed)]
-    for f in failures:
+    failed = [r for r in results if isinstance(r, JobFailed)]  # plug-in runs that raised (--controller)
+    for f in failed:
         if not f.job.controller:  # a paper controller's run: the emulator's fault, not the comparison's
             raise OperationError(str(f))
     flown = {t.exp.NAME: t.result for t in threads}
@@ -244,5 +243,5 @@ def reproduce(out_dir, *, seed: int = 0, workers: int | None = None, scheduler=N
                          controller=controller, strategy=strategy)
     files += [out / name for s in sections for name in s.figures]
     files += [c.out_dir / name for i, c in enumerate(contexts) if i > 0 for s in by_ctx[i] for name in s.figures]
-    return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=sum(r.sim_time_s for r in results if not isinstance(r, JobFailed)),
-                   columns=columns, failures=failures)
+    flown_s = sum(r.sim_time_s for r in results if not isinstance(r, JobFailed))
+    return Outcome(files=files, sections=sections, jobs=len(jobs), sim_seconds=flown_s, columns=columns)

@@ -16,8 +16,8 @@ from rig_emulator.config.loader import ConfigError, RigConfig
 from rig_emulator.control.controller import (CS_TEST_UNTIL, CS_TEST_V, OUT_ATT_DES, OUT_ATT_RATE_DES, OUT_FLAGS, OUT_S,
                                              OUT_THRUST_CMD, OUT_U, REF_MODE, REF_POS, REF_VEL, REF_YAW)
 from rig_emulator.guidance.offboard import (OFB_ATT, OFB_ACC, OFB_KIND, OFB_KIND_ATTITUDE, OFB_KIND_POSITION,
-                                            OFB_KIND_RATES, OFB_POS, OFB_RATE, OFB_SIZE, OFB_T0, OFB_THRUST, OFB_VEL,
-                                            OFB_YAW, OFB_YAW0, OFB_YAW_RATE, OFB_POS0, VELOCITY_TRACK_LEAD_M)
+                                            OFB_KIND_RATES, OFB_POS, OFB_POS0, OFB_RATE, OFB_SIZE, OFB_T0, OFB_THRUST,
+                                            OFB_VEL, OFB_YAW, OFB_YAW0, OFB_YAW_RATE, VELOCITY_TRACK_LEAD_M)
 from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, OFFBOARD,
                                           WAYPOINTS, start_at)
 from rig_emulator._jit import jit

@@ -189,7 +189,8 @@ def _stream_for(conn, seconds, n, e, d):
         if t >= t_next or time.monotonic() - sent > 0.02:
             _local(conn, n, e, d)
             sent = time.monotonic()
-            t_next = max(t_next + 0.1, t) if t >= t_next else t_next
+            if t >= t_next:
+                t_next = t + 0.1
         m = recv(conn, "LOCAL_POSITION_NED", 10.0)
         t = m.time_boot_ms * 1e-3
         far = max(far, math.hypot(m.x, m.y))
