@@ -46,6 +46,10 @@ Supported commands (anything else: ``MAV_MISSION_UNSUPPORTED``):
   time-of-day form, is refused); its frame and position are not used.
 * ``MAV_CMD_NAV_RETURN_TO_LAUNCH``: the mission ends here and the rig returns to home and
   lands (its AUTO.RTL mode, as PX4 does); items after it are not flown. Frame not used.
+* ``MAV_CMD_HILMS_SYSID`` (the hilms dialect): the identification flight, flown when the mission
+  reaches it (param1 must be 1; the other params and the frame are not used). Its programme
+  ends disarmed, so it ends the mission: it must be the last item (an item after it is
+  refused at upload, ``MAV_MISSION_INVALID``, naming both items).
 * ``MAV_CMD_DO_JUMP``: param1 the item to jump to, param2 how many times (0..100). The plan
   unrolls the jumps (at most :data:`MAX_LEGS` legs), so a resumed or restarted mission
   repeats them from the start.
@@ -79,10 +83,10 @@ LOCAL_FRAMES = frozenset({M.MAV_FRAME_LOCAL_NED, M.MAV_FRAME_LOCAL_ENU})
 POSITION_FRAMES = GLOBAL_FRAMES | RELATIVE_FRAMES | LOCAL_FRAMES
 NAV_COMMANDS = frozenset({M.MAV_CMD_NAV_WAYPOINT, M.MAV_CMD_NAV_TAKEOFF, M.MAV_CMD_NAV_LAND,
                           M.MAV_CMD_NAV_LOITER_TIME, M.MAV_CMD_NAV_DELAY, M.MAV_CMD_NAV_RETURN_TO_LAUNCH})
-SUPPORTED_COMMANDS = NAV_COMMANDS | {M.MAV_CMD_DO_CHANGE_SPEED, M.MAV_CMD_DO_JUMP}
+SUPPORTED_COMMANDS = NAV_COMMANDS | {M.MAV_CMD_DO_CHANGE_SPEED, M.MAV_CMD_DO_JUMP, M.MAV_CMD_HILMS_SYSID}
 #: items that need no position (their frame is not used)
 POSITIONLESS_COMMANDS = frozenset({M.MAV_CMD_DO_CHANGE_SPEED, M.MAV_CMD_DO_JUMP, M.MAV_CMD_NAV_DELAY,
-                                   M.MAV_CMD_NAV_RETURN_TO_LAUNCH})
+                                   M.MAV_CMD_NAV_RETURN_TO_LAUNCH, M.MAV_CMD_HILMS_SYSID})
 MAX_LEGS = 10_000  # legs of a plan once DO_JUMP repeats are unrolled
 MAX_JUMP_REPEAT = 100
 HOLD_XY, HOLD_XYZ = 1.0, 2.0  # free_xy codes: keep X/Y (take-off, land here), keep X/Y/Z (delay, loiter here)
@@ -190,6 +194,11 @@ def validate_item(item: MissionItem, home: Home | None = None) -> tuple[int, str
             return M.MAV_MISSION_INVALID_PARAM2, (f"item {item.seq}: jump repeat {repeat:g} must be a whole number in "
                                                   f"0..{MAX_JUMP_REPEAT}")
         return M.MAV_MISSION_ACCEPTED, ""
+    if cmd == M.MAV_CMD_HILMS_SYSID:
+        if item.param1 != 1.0:
+            return M.MAV_MISSION_INVALID_PARAM1, (f"item {item.seq}: MAV_CMD_HILMS_SYSID param1 {item.param1:g} "
+                                                  "must be 1 (fly the identification flight)")
+        return M.MAV_MISSION_ACCEPTED, ""
     if cmd in (M.MAV_CMD_NAV_DELAY, M.MAV_CMD_NAV_LOITER_TIME):
         if not (0.0 <= item.param1 < math.inf):
             return M.MAV_MISSION_INVALID_PARAM1, f"item {item.seq}: time {item.param1:g} s must be >= 0"
@@ -242,6 +251,7 @@ class MissionPlan:
     #: item, NaN where the leg keeps the X/Y the rig has): what the fence check measures
     horizontal_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
     return_seq: int = -1  # a NAV_RETURN_TO_LAUNCH item ends the legs: the rig returns (AUTO.RTL); -1 none
+    sysid_seq: int = -1  # a MAV_CMD_HILMS_SYSID item ends the legs: the identification flight; -1 none
 
     @property
     def size(self) -> int:
@@ -309,7 +319,7 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
     first = 1 if item0_home else 0
     wps, radii, holds, speeds, free, seqs, lands, horiz = [], [], [], [], [], [], [], []
     speed = 0.0
-    return_seq = -1
+    return_seq = sysid_seq = -1
     jumps_left: dict[int, int] = {}
     pc = first
     while pc < len(items):
@@ -334,6 +344,12 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
             continue
         if item.command == M.MAV_CMD_NAV_RETURN_TO_LAUNCH:
             return_seq = item.seq
+            break
+        if item.command == M.MAV_CMD_HILMS_SYSID:
+            if pc < len(items):
+                raise ValueError(f"item {items[pc].seq}: nothing may follow item {item.seq} MAV_CMD_HILMS_SYSID (the "
+                                 "identification flight ends disarmed): end the mission there")
+            sysid_seq = item.seq
             break
         radius, hold, free_xy, land = 0.0, 0.0, 0.0, 0.0
         from_item = item.command in (M.MAV_CMD_NAV_WAYPOINT, M.MAV_CMD_NAV_LOITER_TIME, M.MAV_CMD_NAV_LAND)
@@ -377,7 +393,7 @@ def mission_plan(items, home: Home, item0_home: bool = False) -> MissionPlan:
     return MissionPlan(waypoints=np.asarray(wps, dtype=float).reshape(n, 3), radii=np.asarray(radii, dtype=float),
                        holds=np.asarray(holds, dtype=float), speeds=np.asarray(speeds, dtype=float),
                        free_xy=np.asarray(free, dtype=float), seqs=tuple(seqs), count=len(items), first_seq=first,
-                       lands=np.asarray(lands, dtype=float), return_seq=return_seq,
+                       lands=np.asarray(lands, dtype=float), return_seq=return_seq, sysid_seq=sysid_seq,
                        horizontal_m=np.asarray(horiz, dtype=float))
 
 

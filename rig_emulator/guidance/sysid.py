@@ -152,17 +152,27 @@ def part_of(t: float) -> str:
 
 class SysidProgramme:
     """Drives a :class:`~rig_emulator.simulation.run.Simulation` through the programme: before each
-    piece of at most :data:`UPDATE_S` the set-point (and arming) of its start time is applied."""
+    piece of at most :data:`UPDATE_S` the set-point (and arming) of its start time is applied.
 
-    def __init__(self, sim):
+    The programme's clock starts at step ``start_k`` of the simulation (0: the headless scenario; a
+    served rig starts it when commanded, :meth:`~rig_emulator.simulation.live.LiveRig.start_sysid`)."""
+
+    def __init__(self, sim, start_k: int = 0):
         self.period_steps = max(1, int(round(UPDATE_S / sim.dt)))
         self.hover = sim.pp.mass * sim.pp.g
+        self.start_k = int(start_k)
         self.ofb = None
+
+    def elapsed(self, sim) -> float:
+        """The programme's time at the simulation's current step (s)."""
+        return (sim.k - self.start_k) * sim.dt
 
     def apply(self, sim) -> None:
         from rig_emulator.guidance.runner import OFFBOARD
 
-        armed, att, rate, thrust = setpoint(sim.time)
+        if self.ofb is not None and (sim.k - self.start_k) % self.period_steps:
+            return  # between two update instants (a served rig's chunk starts there): the set-point stands
+        armed, att, rate, thrust = setpoint(self.elapsed(sim))
         if self.ofb is None or sim.gp.offboard is not self.ofb or sim.gp.gtype != OFFBOARD:
             ofb = np.full(sim.gp.offboard.shape[0], np.nan)
             ofb[OFB_KIND] = OFB_KIND_ATTITUDE
@@ -179,8 +189,9 @@ class SysidProgramme:
     def pieces(self, k: int, n_steps: int):
         """Split ``n_steps`` from step ``k`` at the programme's update instants: (steps) each."""
         end = k + n_steps
+        k0, period = self.start_k, self.period_steps
         while k < end:
-            nxt = (k // self.period_steps + 1) * self.period_steps
+            nxt = k0 + ((k - k0) // period + 1) * period
             n = min(nxt, end) - k
             yield k, n
             k += n

@@ -53,6 +53,7 @@ from rig_emulator.link.mission.transfer import MissionTransfer
 from rig_emulator.link.commands import flight_commands
 from rig_emulator.link.commands.modes import FlightModes, split_custom_mode
 from rig_emulator.link.commands.offboard_setpoints import OffboardSetpoints
+from rig_emulator.link.commands.sysid_flight import SysidFlight
 from rig_emulator.link.parameters.service import ParamService
 from rig_emulator.link.parameters.table import ParamTable
 from rig_emulator.link.signing.policy import refuse_setup_signing
@@ -93,6 +94,7 @@ class RigServer:
         self.console = Console(enabled=console)
         self.flight = FlightControl(self)  # PX4's modes on the rig's guidance, arming checks, flight tasks
         self.ctx.flight = self.flight
+        self.sysid_flight = SysidFlight(self)  # the identification flight (MAV_CMD_HILMS_SYSID, AUTO.SYSID)
         self.gcs_loss = GcsLoss()
         self.reboot_pending = False
         self.mission = MissionExecutor(self, store=state.mission if state is not None else None)
@@ -368,6 +370,7 @@ class RigServer:
         self.hover_thrust.update(self.rig.step(self.chunk_steps), self.rig)
         self.counters.steps += self.chunk_steps
         self._snap = None
+        self.sysid_flight.poll()
         self.mission.poll()
         self.offboard_loss.poll()
         self.fence.poll()

@@ -20,6 +20,8 @@ from rig_emulator.guidance.offboard import (OFB_ATT, OFB_ACC, OFB_KIND, OFB_KIND
                                             OFB_VEL, OFB_YAW, OFB_YAW0, OFB_YAW_RATE, VELOCITY_TRACK_LEAD_M)
 from rig_emulator.guidance.runner import (ATTITUDE, GS_DONE, GS_HOLD_UNTIL, GS_INDEX, GS_STARTED, HOVER, OFFBOARD,
                                           WAYPOINTS, start_at)
+from rig_emulator.guidance.sysid import DURATION_S as SYSID_DURATION_S
+from rig_emulator.guidance.sysid import SysidProgramme, part_of
 from rig_emulator._jit import jit
 from rig_emulator.physics import state as S
 from rig_emulator.physics.hardware import motor_thrust, rest_attitude
@@ -224,6 +226,42 @@ class MissionStatus:
     index: int  # waypoint being flown to (the last one once done)
     done: bool  # the last waypoint was reached
     reached_t: np.ndarray  # time each waypoint was reached, NaN until then
+
+
+@dataclass(frozen=True)
+class SysidStatus:
+    """The identification flight on a served rig (:meth:`LiveRig.sysid_status`)."""
+
+    elapsed_s: float  # the programme's own time (s), 0 at its start
+    part: str  # the part of guidance/sysid.py's table being flown ("after the programme" once done)
+    done: bool  # the whole programme has been flown (it ended disarmed)
+    stopped: str | None  # why it stopped itself before the end (None: it has not)
+    replaced: bool = False  # it stopped because another guidance took over (which steers now)
+
+
+class _ServedSysid(SysidProgramme):
+    """The identification programme (guidance/sysid.py) on a served rig: its clock starts at the step it
+    is started at, and it stops for good, touching nothing, when anything but itself disarms or arms the
+    rig (the failsafe, a plug-in failure, a terminate action) or replaces its set-point (another guidance):
+    it never takes the rig back from whatever took it."""
+
+    def __init__(self, sim):
+        super().__init__(sim, start_k=sim.k)
+        self.armed_cmd = sim.armed  # the arming the programme last left the rig in
+        self.stopped: str | None = None
+        self.replaced = False
+
+    def apply(self, sim) -> None:
+        if self.stopped is not None:
+            return
+        if self.ofb is not None and (sim.gp.gtype != OFFBOARD or sim.gp.offboard is not self.ofb):
+            self.stopped, self.replaced = "another guidance took over", True
+            return
+        if sim.armed != self.armed_cmd:
+            self.stopped = "the rig was " + ("armed" if sim.armed else "disarmed") + " by something else"
+            return
+        super().apply(sim)
+        self.armed_cmd = sim.armed
 
 
 class LiveRig:
@@ -433,6 +471,34 @@ class LiveRig:
     # --- commanding ------------------------------------------------------------------------
     def arm(self, armed: bool = True) -> None:
         self.sim.armed = bool(armed)
+
+    # --- the identification flight (guidance/sysid.py) ------------------------------------------------
+    def start_sysid(self) -> None:
+        """Fly the identification flight from now, on the rig's own clock, exactly as the headless
+        scenario ``sysid`` does from t = 0: the programme's attitude and thrust set-points, and its own
+        disarming and re-arming for the swings (without the pre-arm checks: the rig swings then); it
+        ends disarmed. ValueError when the rig is disarmed. It stops by itself when anything else arms,
+        disarms or steers the rig (:class:`_ServedSysid`); :meth:`stop_sysid` stops it. Refused (ValueError)
+        on a rig whose motors a flight stack in the loop drives (``external_motors``): the programme's
+        set-points would steer nothing, and its disarming would cut the flight stack's motors."""
+        if self._external_motors:
+            raise ValueError("a flight stack in the loop drives the motors: fly the programme from it")
+        if not self.sim.armed:
+            raise ValueError("the rig is disarmed: arm it first")
+        self.sim.programme = _ServedSysid(self.sim)
+
+    def stop_sysid(self) -> None:
+        """Forget the identification flight; the guidance and the arming stay as they are."""
+        self.sim.programme = None
+
+    def sysid_status(self) -> SysidStatus | None:
+        """Where the identification flight is (None: none is being flown; cheap)."""
+        prog = self.sim.programme
+        if not isinstance(prog, _ServedSysid):
+            return None
+        t = prog.elapsed(self.sim)
+        return SysidStatus(elapsed_s=t, part=part_of(t), done=t >= SYSID_DURATION_S, stopped=prog.stopped,
+                           replaced=prog.replaced)
 
     def set_motor_voltages(self, volts) -> None:
         """Motor voltages 1-4 (V) from the next step on; a rig built with ``external_motors=True``."""

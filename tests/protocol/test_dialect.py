@@ -33,7 +33,8 @@ VENDORED_SHA256 = {
     "development.xml": "7ea3322f265a2d7b18313050ce3163f93373ea17917ca7add3ff6ac7956e3ee2",
 }
 CUSTOM_MESSAGES = ["HILMS_LOAD_CELLS", "HILMS_IMU_MODULE", "HILMS_CONTROLLER_STATE"]
-CUSTOM_COMMANDS = ["MAV_CMD_HILMS_SHOCK", "MAV_CMD_HILMS_EXTRA_MASS", "MAV_CMD_HILMS_SENSOR_FAULT"]
+CUSTOM_COMMANDS = ["MAV_CMD_HILMS_SHOCK", "MAV_CMD_HILMS_EXTRA_MASS", "MAV_CMD_HILMS_SENSOR_FAULT",
+                   "MAV_CMD_HILMS_SYSID"]
 
 
 def _hilms_root() -> ET.Element:
@@ -131,6 +132,7 @@ def test_generated_module_exposes_ids_and_commands():
     assert mavlink.MAV_CMD_HILMS_SHOCK == 58100
     assert mavlink.MAV_CMD_HILMS_EXTRA_MASS == 58101
     assert mavlink.MAV_CMD_HILMS_SENSOR_FAULT == 58102
+    assert mavlink.MAV_CMD_HILMS_SYSID == 58103
     # common's commands survive the MAV_CMD merge
     assert mavlink.MAV_CMD_NAV_WAYPOINT == 16
     assert mavlink.WIRE_PROTOCOL_VERSION == "2.0"

@@ -57,6 +57,9 @@ def test_scaling_by_frame():
     (MissionItem(0, M.MAV_FRAME_GLOBAL, M.MAV_CMD_NAV_TAKEOFF, z=1199.0), M.MAV_MISSION_INVALID_PARAM7),
     (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_CHANGE_SPEED, param2=-1.0), M.MAV_MISSION_ACCEPTED),
     (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_CHANGE_SPEED, param2=101.0), M.MAV_MISSION_INVALID_PARAM2),
+    (MissionItem(0, M.MAV_FRAME_GLOBAL_INT, M.MAV_CMD_HILMS_SYSID, param1=1.0), M.MAV_MISSION_ACCEPTED),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_HILMS_SYSID, param1=0.0), M.MAV_MISSION_INVALID_PARAM1),
+    (MissionItem(0, M.MAV_FRAME_MISSION, M.MAV_CMD_HILMS_SYSID, param1=math.nan), M.MAV_MISSION_INVALID_PARAM1),
 ])
 def test_validation_results(item, result):
     assert validate_item(item, HOME)[0] == result
@@ -105,3 +108,17 @@ def test_plan_unrolls_jumps_and_ends_at_a_return():
     with pytest.raises(ValueError, match="jump target 8"):
         mission_plan(items[:3] + [MissionItem(3, M.MAV_FRAME_MISSION, M.MAV_CMD_DO_JUMP, param1=8.0, param2=1.0)],
                      HOME)
+
+
+def test_the_identification_flight_item_ends_the_mission():
+    """MAV_CMD_HILMS_SYSID ends the legs (its programme ends disarmed): nothing may follow it."""
+    enu = M.MAV_FRAME_LOCAL_ENU
+    sysid = MissionItem(2, M.MAV_FRAME_MISSION, M.MAV_CMD_HILMS_SYSID, param1=1.0)
+    items = [MissionItem(0, enu, M.MAV_CMD_NAV_TAKEOFF, z=1.0), MissionItem(1, M.MAV_FRAME_MISSION, M.MAV_CMD_NAV_DELAY,
+                                                                           param1=2.0), sysid]
+    plan = mission_plan(items, HOME)
+    assert plan.seqs == (0, 1) and plan.sysid_seq == 2 and plan.return_seq == -1
+    only = mission_plan([sysid.with_seq(0)], HOME)
+    assert only.size == 0 and only.sysid_seq == 0
+    with pytest.raises(ValueError, match="item 3: nothing may follow item 2 MAV_CMD_HILMS_SYSID"):
+        mission_plan(items + [MissionItem(3, enu, M.MAV_CMD_NAV_WAYPOINT, x=1.0, z=1.0)], HOME)

@@ -18,9 +18,11 @@ DO_LAND_START), REQUEST_MESSAGE, REQUEST_AUTOPILOT_CAPABILITIES,
 SET_MESSAGE_INTERVAL, GET_MESSAGE_INTERVAL, GET_HOME_POSITION, MISSION_START and
 DO_SET_MISSION_CURRENT (:mod:`rig_emulator.link.mission.executor`), PREFLIGHT_CALIBRATION (param1,
 gyro, or param2, magnetometer, or param5, accelerometer = 1: reruns the IMU calibration
-procedure of Sec. 4-1, disarmed only), MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
+procedure of Sec. 4-1, disarmed only and not during the identification flight),
+MAV_CMD_HILMS_SHOCK, MAV_CMD_HILMS_EXTRA_MASS and
 MAV_CMD_HILMS_SENSOR_FAULT (IMU modules 0..4, load cells and motors 1..4; docs/how-to/faults.md),
-DO_FENCE_ENABLE (param1 0/1: the geofence off/on for this run).
+DO_FENCE_ENABLE (param1 0/1: the geofence off/on for this run), MAV_CMD_HILMS_SYSID (the
+identification flight: :mod:`rig_emulator.link.commands.sysid_flight`).
 A supported command with unusable parameters is DENIED with a STATUSTEXT saying why.
 A shock outside the ranges of the config's ``disturbance.shocks`` entries (torque within
 +-100 N m, duration in (0, 10] s) is DENIED with the reason; a calibration less than
@@ -39,6 +41,7 @@ from rig_emulator.config.loader import ConfigError, check_value
 from rig_emulator.config.schema import SCHEMA
 from rig_emulator.link.commands import flight_commands
 from rig_emulator.link.commands import standard_modes
+from rig_emulator.link.commands.sysid_flight import sysid_command
 from rig_emulator.link.mission.executor import MISSION_COMMANDS
 from rig_emulator.link.telemetry.stream_table import ON_REQUEST, STREAMS
 from rig_emulator.sensors.faults import FAULT_NAMES
@@ -174,6 +177,9 @@ def _calibration(cmd, srv, channel):
     if not any(v == 1.0 for v in wants):
         # other PREFLIGHT_CALIBRATION targets (baro, radio, airspeed, ...) do not exist on the rig
         return UNSUPPORTED, []
+    busy = srv.sysid_flight.busy_refusal("calibration")
+    if busy is not None:  # disarmed in a swing, the rig is anything but still
+        return _denied(srv, busy)
     # The procedure blocks the loop for about 0.1 s: back to back, calibrations would stall the control loop.
     now = time.monotonic()
     if now - srv.last_calibration < CALIBRATION_INTERVAL_S and not srv.snapshot().armed:  # armed: DENIED below
@@ -237,6 +243,7 @@ HANDLERS = {
     M.MAV_CMD_GET_MESSAGE_INTERVAL: _get_interval,
     M.MAV_CMD_HILMS_SHOCK: _shock,
     M.MAV_CMD_HILMS_EXTRA_MASS: _extra_mass,
+    M.MAV_CMD_HILMS_SYSID: sysid_command,
     M.MAV_CMD_DO_SET_STANDARD_MODE: standard_modes.set_standard_mode,
     **MISSION_COMMANDS,  # MISSION_START, DO_SET_MISSION_CURRENT
     **flight_commands.FLIGHT_COMMANDS,  # takeoff, land, return, reposition, speed, home, reboot, motor test

@@ -26,10 +26,12 @@ origin's altitude, so a relative or terrain altitude is the height above it.
 * ``MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN``: param1 = 1 (reboot the autopilot) restarts the
   simulation from its initial state, disarmed, with the parameters and the mission kept,
   without restarting the process; param1 = 0 with other params: nothing (ACCEPTED, as the
-  spec's "do nothing"); shutdown (2) and other values are refused. Disarmed only.
+  spec's "do nothing"); shutdown (2) and other values are refused. Disarmed only, and not while the
+  identification flight runs (disarmed in its swings).
 * ``MAV_CMD_DO_MOTOR_TEST``: param1 motor 1..4, param2 throttle type (0 percent, 1 PWM,
   2 pass-through: fraction of full voltage), param3 value, param4 timeout (s, <= 10): spins
-  one motor at that voltage on the bench, disarmed only; param5 motor count 0/1.
+  one motor at that voltage on the bench, disarmed only (and not during the identification
+  flight's swings); param5 motor count 0/1.
 * ``MAV_CMD_DO_SET_STANDARD_MODE`` and ``MAV_CMD_DO_LAND_START``: see
   :mod:`rig_emulator.link.commands.standard_modes` and :func:`_land_start`.
 """
@@ -217,6 +219,9 @@ def reboot(cmd, srv, channel):
                       UNSUPPORTED)
     if srv.rig.armed:
         return refuse(srv, "reboot refused: disarm first")
+    busy = srv.sysid_flight.busy_refusal("reboot")
+    if busy is not None:
+        return refuse(srv, busy)
     srv.reboot_pending = True  # the server reboots once the ACK is out
     return ACCEPTED, []
 
@@ -225,6 +230,9 @@ def motor_test(cmd, srv, channel):
     motor, kind, value, timeout = cmd.int_param(1), cmd.int_param(2), cmd.p(3), cmd.p(4)
     if srv.rig.armed:
         return refuse(srv, "motor test refused: disarm first")
+    busy = srv.sysid_flight.busy_refusal("motor test")
+    if busy is not None:
+        return refuse(srv, busy)
     if motor is None or not 1 <= motor <= 4:
         return refuse(srv, f"motor test refused: motor {cmd.p(1)} must be 1..4")
     if value is None or timeout is None or not 0.0 < timeout <= MOTOR_TEST_MAX_S:

@@ -15,8 +15,9 @@ return, fly-to) and registers the mode handlers of :mod:`rig_emulator.link.comma
 After a landing the rig is disarmed and the mode becomes AUTO.LOITER (arming is refused in
 AUTO.RTL and AUTO.LAND, as MAVSDK expects: it switches to Hold before arming from Return).
 Arming runs :func:`~rig_emulator.simulation.prearm.prearm_failure` first; a refusal comes
-with the reason. MAVLink stays outside: the command handlers in
-:mod:`rig_emulator.link.commands.flight_commands` call these methods and answer.
+with the reason. A disarm command, or an arm command during one of its disarmed swings, stops the
+identification flight (:mod:`rig_emulator.link.commands.sysid_flight`). MAVLink stays outside: the
+command handlers in :mod:`rig_emulator.link.commands.flight_commands` call these methods and answer.
 """
 
 from __future__ import annotations
@@ -49,9 +50,11 @@ class FlightControl:
         return self.rig.armed  # now, not the chunk's snapshot: an arm command may have come in since
 
     def _left_mode(self, old: tuple, new: tuple) -> None:
-        """A mode other than a task's own ends the task (that mode's handler set the guidance)."""
+        """A mode other than a task's own ends the task (that mode's handler set the guidance); leaving
+        the identification flight's mode stops it (:mod:`rig_emulator.link.commands.sysid_flight`)."""
         if new not in TASK_MODES:
             self.tasks.cancel()
+        self.srv.sysid_flight.left_mode(old, new)
 
     def _hold(self, rig) -> None:
         self.tasks.cancel()
@@ -100,10 +103,12 @@ class FlightControl:
             why = None if force else self.arm_refusal()
             if why is not None:
                 return why
+            self.srv.sysid_flight.stop("armed by command")  # during a disarmed swing: the ground takes over
             if self.tasks.pending is None and (self.modes.main, self.modes.sub) in (
                     (MD.POSCTL, 0), (MD.AUTO, MD.AUTO_LOITER)):
                 self.rig.hold_position()
         if not armed:
+            self.srv.sysid_flight.stop("disarmed by command")
             self.tasks.cancel()
         was_armed = self.rig.armed
         self.rig.arm(armed)

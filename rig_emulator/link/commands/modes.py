@@ -5,7 +5,8 @@ MAV_AUTOPILOT_PX4 so that every client decodes them as PX4's (pymavlink/MAVProxy
 HEARTBEAT.custom_mode = ``main << 16 | sub << 24`` with PX4's main modes (MANUAL 1,
 ALTCTL 2, POSCTL 3, AUTO 4, ACRO 5, OFFBOARD 6, STABILIZED 7, RATTITUDE 8) and sub-modes
 (POSCTL: ORBIT 1; AUTO: READY 1, TAKEOFF 2, LOITER 3, MISSION 4, RTL 5, LAND 6, RTGS 7,
-FOLLOW_TARGET 8, PRECLAND 9).
+FOLLOW_TARGET 8, PRECLAND 9, and the rig's identification flight in PX4's first external-mode slot,
+EXTERNAL1 11: :mod:`rig_emulator.link.commands.sysid_flight`).
 
 Every PX4 mode is in :data:`MODES`. The ones the rig flies have a handler ``enter(rig)``
 registered (:mod:`rig_emulator.link.commands.flight_control`, :mod:`rig_emulator.link.mission.executor`,
@@ -30,6 +31,9 @@ from protocol.px4_custom_mode import custom_mode, split_custom_mode  # noqa: F40
 MANUAL, ALTCTL, POSCTL, AUTO, ACRO, OFFBOARD, STABILIZED, RATTITUDE = 1, 2, 3, 4, 5, 6, 7, 8
 AUTO_READY, AUTO_TAKEOFF, AUTO_LOITER, AUTO_MISSION, AUTO_RTL, AUTO_LAND = 1, 2, 3, 4, 5, 6
 AUTO_RTGS, AUTO_FOLLOW_TARGET, AUTO_PRECLAND = 7, 8, 9
+#: the identification flight's mode: PX4's first external-mode slot (PX4_CUSTOM_SUB_MODE_EXTERNAL1), where
+#: PX4 reports a mode an onboard component adds (ROS 2 external modes), named in AVAILABLE_MODES
+AUTO_SYSID = 11
 POSCTL_ORBIT = 1
 
 # MAV_STANDARD_MODE values (common.xml)
@@ -67,6 +71,7 @@ MODES: dict[tuple[int, int], Mode] = {
                                      refusal="FOLLOW_TARGET messages are not handled by the rig"),
     (AUTO, AUTO_PRECLAND): Mode("AUTO.PRECLAND", "Precision Land",
                                 refusal="AUTO.PRECLAND needs a landing-target sensor, which the rig has not"),
+    (AUTO, AUTO_SYSID): Mode("AUTO.SYSID", "System ID"),
 }
 MODE_NAMES = {key: m.name for key, m in MODES.items()}
 

@@ -19,7 +19,12 @@ Starting and stopping (PX4's interface, which MAVSDK and QGroundControl use):
   Disarmed, the mode is taken and the mission starts when the rig is armed (PX4; what
   QGroundControl's "start mission" expects). Refused (MAV_RESULT_DENIED) without a mission.
 * The legs end: a NAV_RETURN_TO_LAUNCH item hands over to AUTO.RTL (return, land, disarm); a
-  mission ending in NAV_LAND disarms once the land detector finds the rig on the ground.
+  mission ending in NAV_LAND disarms once the land detector finds the rig on the ground; a
+  final MAV_CMD_HILMS_SYSID item flies the identification flight in AUTO.MISSION
+  (:mod:`rig_emulator.link.commands.sysid_flight`; MISSION_CURRENT shows its seq): when its
+  programme has been flown the rig is disarmed in AUTO.LOITER, MISSION_ITEM_REACHED names the item
+  and the mission is complete; stopped before its end (a mode change, a disarm, an abort), the
+  mission is paused at the item, and resuming it flies the programme again from its start.
 * Leaving AUTO.MISSION (AUTO.LOITER, POSCTL, OFFBOARD, ...) pauses: the rig holds where it
   is (the mode's own behaviour; if a mode would keep the mission running, the rig holds).
 * ``MAV_CMD_DO_SET_MISSION_CURRENT`` (param1 seq; param2 is not used) and the older
@@ -79,6 +84,7 @@ class MissionExecutor:
         self._flown: MissionPlan | None = None  # the plan (maybe cut at a last item) being flown
         self._reported_t = np.zeros(0)
         self._announced = None
+        self._at_sysid = False  # the flown plan has reached its MAV_CMD_HILMS_SYSID item
         self.reached_count = 0
         self.modes.register(AUTO, AUTO_MISSION, self._enter_mission_mode)
 
@@ -108,8 +114,8 @@ class MissionExecutor:
             if was_active:
                 self._hold()
         elif was_active:
-            if plan.size:
-                self._fly(plan, 0, keep_reached=False)
+            if plan.size or plan.sysid_seq >= 0:
+                self._fly(plan, 0 if plan.size else None, keep_reached=False)
             else:
                 self._hold()
                 self.state = COMPLETE
@@ -121,13 +127,25 @@ class MissionExecutor:
         self.replace(())
 
     def _hold(self) -> None:
+        self._end_sysid("the mission was replaced")
         self.rig.hold_position()
         self._flown = None
         if (self.modes.main, self.modes.sub) == (AUTO, AUTO_MISSION):
             self.modes.note(AUTO, AUTO_LOITER)
             self.srv.heartbeat_pending = True
 
-    def _fly(self, plan: MissionPlan, index: int, keep_reached: bool) -> None:
+    def _fly(self, plan: MissionPlan, index: int | None, keep_reached: bool) -> None:
+        """Fly ``plan`` from waypoint ``index``; None: no waypoint is left, straight to its sysid item."""
+        self._end_sysid("the mission moved on")
+        if index is None:
+            self._flown, self._nav = plan, max(plan.size - 1, 0)
+            self.state = ACTIVE
+            if not self._start_sysid():
+                return
+            if (self.modes.main, self.modes.sub) != (AUTO, AUTO_MISSION):
+                self.modes.note(AUTO, AUTO_MISSION)
+                self.srv.heartbeat_pending = True
+            return
         if self._flown is not plan or not keep_reached:
             self.rig.set_mission(plan.waypoints, plan.radii, plan.holds, plan.speeds, plan.free_xy)
             self._reported_t = np.full(plan.size, np.nan)
@@ -142,13 +160,17 @@ class MissionExecutor:
     def _why_not(self, armed_needed: bool = True) -> str | None:
         if armed_needed and not self.rig.armed:
             return "mission refused: arm first"
-        if not self.items or not (self._plan().size or self._plan().return_seq >= 0):
+        if not self.items:
+            return "mission refused: no mission (or no navigation item) stored"
+        plan = self._plan()
+        if not (plan.size or plan.return_seq >= 0 or plan.sysid_seq >= 0):
             return "mission refused: no mission (or no navigation item) stored"
         return None
 
     def after_reboot(self) -> None:
         """A reboot restarted the simulation: the stored mission stays, not started."""
         self._flown = None
+        self._at_sysid = False
         self._nav = 0
         self.state = NOT_STARTED if self.items else NO_MISSION
         self.current_seq = self._plan().first_seq if self.items and self._plan().count > self._plan().first_seq else 0
@@ -166,6 +188,44 @@ class MissionExecutor:
             self.srv.heartbeat_pending = True
         elif plan.size and plan.lands.shape[0] == plan.size and plan.lands[-1]:
             self.srv.flight.tasks.watch_landing()
+
+    # --- the identification flight item ------------------------------------------------------------
+    def _start_sysid(self) -> bool:
+        """The flown plan reached its MAV_CMD_HILMS_SYSID item: fly the programme for the mission (one
+        flown in AUTO.SYSID goes on, now the mission's). False, with the reason said and the mission
+        paused, when it cannot start."""
+        self._at_sysid = True
+        seq = self._flown.sysid_seq
+        why = self.srv.sysid_flight.start_for_mission(seq)
+        if why is None:
+            return True
+        self.srv.statustext(None, M.MAV_SEVERITY_WARNING, f"mission: item {seq}: {why}")
+        self.state = PAUSED
+        self.rig.hold_position()
+        if (self.modes.main, self.modes.sub) == (AUTO, AUTO_MISSION):
+            self.modes.note(AUTO, AUTO_LOITER)
+            self.srv.heartbeat_pending = True
+        return False
+
+    def _end_sysid(self, reason: str) -> None:
+        """Stop a programme flown for this mission (the mission steers next)."""
+        if self._at_sysid:
+            self._at_sysid = False
+            if self.srv.sysid_flight.owner == "mission":
+                self.srv.sysid_flight.stop(reason, hold=False)
+
+    def sysid_ended(self, done: bool) -> None:
+        """The programme flown for the mission ended: flown to its end (the mission is complete) or
+        stopped (the mission is paused at the item)."""
+        if not self._at_sysid or self._flown is None:
+            return
+        if done:
+            self.state = COMPLETE
+            self.srv.broadcast(M.MAVLink_mission_item_reached_message(seq=self._flown.sysid_seq))
+            self.reached_count += 1
+        else:
+            self.state = PAUSED
+        self.announce()
 
     def _refuse(self, reason: str) -> tuple[int, list]:
         return DENIED, self.srv.statustext_messages(M.MAV_SEVERITY_WARNING, reason)
@@ -189,12 +249,17 @@ class MissionExecutor:
                               speeds=plan.speeds[keep], free_xy=plan.free_xy[keep], lands=plan.lands[keep],
                               horizontal_m=plan.horizontal_m[keep] if plan.horizontal_m.size else plan.horizontal_m,
                               seqs=tuple(plan.seqs[i] for i in keep),
-                              return_seq=plan.return_seq if plan.return_seq <= last else -1)
+                              return_seq=plan.return_seq if plan.return_seq <= last else -1,
+                              sysid_seq=plan.sysid_seq if plan.sysid_seq <= last else -1)
         index = plan.nav_index(first)
         if index is None:
             if plan.return_seq >= first:  # nothing to fly before the return
                 self._flown, self.state = plan, COMPLETE
                 self._finish()
+                self.announce()
+                return ACCEPTED, []
+            if plan.sysid_seq >= first:  # nothing to fly before the identification flight
+                self._fly(plan, None, keep_reached=False)
                 self.announce()
                 return ACCEPTED, []
             return self._refuse(f"mission refused: no navigation item in {first}..{last}")
@@ -212,7 +277,7 @@ class MissionExecutor:
         seq = max(int(seq), plan.first_seq)
         if self.state == ACTIVE and self._flown is not None:
             index = self._flown.nav_index(seq)
-            if index is None:
+            if index is None and self._flown.sysid_seq < seq:
                 return self._refuse(f"set current refused: no navigation item from {seq} on")
             self._fly(self._flown, index, keep_reached=True)
         else:
@@ -253,11 +318,11 @@ class MissionExecutor:
             self.rig.hold_position()
             return True
         if self.state == PAUSED and self._flown is not None:
-            self._fly(self._flown, self._nav, keep_reached=True)
+            self._fly(self._flown, None if self._at_sysid else self._nav, keep_reached=True)
         else:
             plan = self._plan()
             index = plan.nav_index(self.current_seq)
-            if index is None:
+            if index is None and plan.sysid_seq < self.current_seq:
                 return "mission refused: no navigation item left"
             self._fly(plan, index, keep_reached=False)
         return True
@@ -270,11 +335,13 @@ class MissionExecutor:
                 if self.rig.mission_status().flying:
                     self.rig.hold_position()  # a mode that kept the mission target: hold instead
                 self.state = PAUSED
-            else:
+            elif not self._at_sysid:  # (the identification flight's progress: sysid_ended)
                 st = self.rig.mission_status()
                 self._report_reached(st.reached_t)
                 self._nav = st.index
-                if st.done:
+                if st.done and self._flown is not None and self._flown.sysid_seq >= 0:
+                    self._start_sysid()
+                elif st.done:
                     self.state = COMPLETE
                     self._finish()
         self.announce()
@@ -292,6 +359,8 @@ class MissionExecutor:
         self._reported_t = reached_t.copy()
 
     def current_seq_now(self) -> int:
+        if self._at_sysid and self._flown is not None:
+            return self._flown.sysid_seq
         if self.state in (ACTIVE, PAUSED, COMPLETE) and self._flown is not None and self._flown.size:
             return self._flown.seqs[min(self._nav, self._flown.size - 1)]
         return self.current_seq

@@ -11,7 +11,13 @@ The default streams start staggered: the i-th stream of the table first falls du
 streams whose rates divide one another do not all fall due in the same service period
 (building all of them at once cost ~2 ms of CPU every simulated second, which delayed the
 physics under load). A rate set later (MAV_CMD_SET_MESSAGE_INTERVAL, REQUEST_DATA_STREAM)
-starts at once, as before.
+starts at once, and from its second message on falls due on its interval's grid of simulated
+time (the multiples of the interval, counted from t = 0), also after the loop ran late: streams
+a peer asked for at one rate (or at rates that divide one another) fall due in the same service
+period, so their messages are built from one snapshot and share their time stamp, whenever each
+was asked for. (An identification log needs ATTITUDE, SERVO_OUTPUT_RAW and HILMS_LOAD_CELLS rows
+at one stamp, gcs_tools/identify/sysid_log.py: at 100 Hz with 5 ms service periods, requests a
+period apart would otherwise have kept their streams 5 ms apart for good.)
 """
 
 from __future__ import annotations
@@ -28,8 +34,9 @@ class StreamSchedule:
         self.interval_s: dict[int, float] = {}
         self.next_due: dict[int, float] = {}
         self._start_offsets: dict[int, float] = {}
+        self._on_grid: set[int] = set()  # streams a peer set: due on their interval's grid of simulated time
         for msg_id, hz in self.default_hz.items():
-            self.set_rate(msg_id, hz, now=0.0)
+            self.set_rate(msg_id, hz, now=0.0, grid=False)
         # first due time of each default stream, relative to the first call of due()
         self._start_offsets = {msg_id: (i * min_interval_s) % interval if interval > 0.0 else 0.0
                                for i, (msg_id, interval) in enumerate(self.interval_s.items())}
@@ -37,12 +44,18 @@ class StreamSchedule:
     def knows(self, msg_id: int) -> bool:
         return msg_id in self.default_hz
 
-    def set_rate(self, msg_id: int, hz: float, now: float) -> float:
-        """Stream ``msg_id`` at ``hz`` (0 = off); returns the interval in effect (s)."""
+    def set_rate(self, msg_id: int, hz: float, now: float, grid: bool = True) -> float:
+        """Stream ``msg_id`` at ``hz`` (0 = off) from ``now`` on, after its first message on the interval's
+        grid (``grid``; the constructor's default rates are staggered instead); returns the interval in
+        effect (s)."""
         interval = 0.0 if hz <= 0.0 or not math.isfinite(hz) else max(1.0 / hz, self.min_interval_s)
         self.interval_s[msg_id] = interval
         self.next_due[msg_id] = now
         self._start_offsets.pop(msg_id, None)
+        if grid:
+            self._on_grid.add(msg_id)
+        else:
+            self._on_grid.discard(msg_id)
         return interval
 
     def set_interval(self, msg_id: int, interval_us: float, now: float) -> float:
@@ -75,12 +88,16 @@ class StreamSchedule:
             self._start_offsets = {}
         out = []
         next_due = self.next_due
+        on_grid = self._on_grid
         late = now + EPS_S
         for msg_id, interval in self.interval_s.items():
             due_at = next_due[msg_id]
             if late < due_at or interval <= 0.0:
                 continue
             out.append(msg_id)
+            if msg_id in on_grid:  # the first multiple of the interval after now
+                next_due[msg_id] = (math.floor(late / interval) + 1) * interval
+                continue
             nxt = due_at + interval
             next_due[msg_id] = nxt if nxt + EPS_S > now else now + interval
         return out

@@ -200,7 +200,7 @@ def test_standard_modes_list_set_and_report(rig, gcs):
         if len(modes) == m.number_modes:
             break
     names = {m.mode_name for m in modes.values()}
-    assert {"Position", "Hold", "Mission", "Return", "Land", "Takeoff", "Offboard", "Stabilized"} == names
+    assert {"Position", "Hold", "Mission", "Return", "Land", "Takeoff", "Offboard", "Stabilized", "System ID"} == names
     by_std = {m.standard_mode: m.custom_mode for m in modes.values() if m.standard_mode}
     assert by_std[M.MAV_STANDARD_MODE_SAFE_RECOVERY] == MD.custom_mode(MD.AUTO, MD.AUTO_RTL)
     assert command(gcs, M.MAV_CMD_DO_SET_STANDARD_MODE, M.MAV_STANDARD_MODE_LAND).result == ACCEPTED

@@ -47,3 +47,28 @@ def test_a_requested_rate_starts_at_once():
     s.due(3.005)
     s.set_rate(M.MAVLINK_MSG_ID_SYSTEM_TIME, 2.0, now=3.01)  # after the first service too
     assert M.MAVLINK_MSG_ID_SYSTEM_TIME in s.due(3.01)
+
+
+def test_requested_streams_of_one_rate_fall_due_together_whenever_each_was_asked_for():
+    """An identification log's rows: ATTITUDE, SERVO_OUTPUT_RAW and HILMS_LOAD_CELLS asked for at 100 Hz one
+    service period apart share every due period after their first message, also after the loop ran late."""
+    ids = (M.MAVLINK_MSG_ID_ATTITUDE, M.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW, M.MAVLINK_MSG_ID_HILMS_LOAD_CELLS)
+    s = StreamSchedule(default_rates(), CHUNK)
+    t0 = 7.0
+    asked = dict(zip(ids, (0, 1, 3)))  # one request per service period
+    due_at = {msg_id: [] for msg_id in ids}
+    for k in range(2000):
+        now = t0 + k * CHUNK
+        for msg_id, k_asked in asked.items():
+            if k == k_asked:
+                s.set_interval(msg_id, 10_000, now)
+        if 500 <= k < 510:  # the loop ran late: these periods are never serviced
+            continue
+        for msg_id in s.due(now):
+            if msg_id in due_at and k >= asked[msg_id]:
+                due_at[msg_id].append(round(now, 6))
+    firsts = [due_at[i][0] for i in ids]
+    assert firsts == [round(t0 + k * CHUNK, 6) for k in (0, 1, 3)]  # each starts at once
+    rows = [[t for t in due_at[i] if t > max(firsts)] for i in ids]  # once all three stream
+    assert rows[0] == rows[1] == rows[2]
+    assert len(rows[0]) >= 985  # 100 Hz over 10 s, less the 50 ms not serviced
