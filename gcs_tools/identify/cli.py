@@ -102,6 +102,9 @@ def add_parser(sub) -> None:
     g.add_argument("--calibration-study", type=_evals, metavar="N",
                    help="run the regression's calibration study: N random hidden draws (sysid flights on hilms), "
                         "coverage of the 95 %% intervals and median errors, matched and mismatched")
+    g.add_argument("--study-seed", type=int, default=0, metavar="S",
+                   help="calibration study: 0 (default) the draws and noise seeds the intervals' scales were "
+                        "measured on; another value draws other hidden values and flies other seeds")
     g.add_argument("--scenario", action="append", default=[], metavar="NAME",
                    help="the scenario preset flown in the log (once for all logs, or once per --tlog in order)")
     g.add_argument("--strategy", action="append", default=[], help="the strategy flown (once, or once per --tlog; "

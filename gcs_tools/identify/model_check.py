@@ -6,7 +6,8 @@ Two channels, each cut into windows of :data:`WINDOW_S` seconds:
   window **predicted by a fit that did not see it** (the regression refitted without the window: a
   held-out test, cheap because the balance is linear). Its mean square is compared with what the noise
   model says it should be there, ``kappa sigma^2 L^2`` (the random torque at the window's rotor load)
-  plus the load cells' own noise and a floor :data:`FLOOR_VAR`. Where the motors are stopped (the swings) that expectation is the
+  plus the load cells' own noise, the variance of the prediction itself (large where the window alone
+  carries an effect, as the yaw spin-down carries the yaw friction) and a floor :data:`FLOOR_VAR`. Where the motors are stopped (the swings) that expectation is the
   load cells' floor alone, so an unmodelled friction or pendulum shows at once;
 * ``load cell 1..4``: the motor chain's residual (gcs_tools/identify/motor_chain.py) against the load
   cells' own filtered noise, relative to the median window of the same cell (the chain's commands are
@@ -55,19 +56,29 @@ def _windows(t: np.ndarray):
         yield a, b, (t >= a) & (t < b)
 
 
-def torque_findings(log, held_out: np.ndarray, expected_var: np.ndarray, used: np.ndarray) -> tuple[list, dict]:
-    """``held_out`` (n, 3): residuals of each window predicted by the fit without it; ``expected_var`` (n, 3)."""
+def torque_findings(log, held_out: np.ndarray, expected_var: np.ndarray, used: np.ndarray,
+                    prediction_var: np.ndarray | None = None, fitted: np.ndarray | None = None) -> tuple[list, dict]:
+    """``held_out`` (n, 3): residuals of each window predicted by the fit without it; ``expected_var`` (n, 3)
+    what the noise leaves; ``prediction_var`` (n, 3) the variance of that prediction itself; ``fitted``
+    (n, 3) the residuals of the fit with every window, judged against the noise alone: where one window
+    carries an effect (the swings, the friction) the held-out prediction is loose, but a model that lacks
+    the effect cannot fit that window even with it."""
     out = []
     worst = {}
+    pv = np.zeros_like(expected_var) if prediction_var is None else np.nan_to_num(prediction_var)
     for a, b, w in _windows(log.t):
         w = w & used
         if w.sum() < 50:
             continue
         for ax, name in enumerate(("torque roll", "torque pitch", "torque yaw")):
-            ratio = float(np.mean(held_out[w, ax] ** 2) / (np.mean(expected_var[w, ax]) + FLOOR_VAR[ax]))
-            worst[name] = max(worst.get(name, 0.0), ratio)
-            if ratio > TORQUE_LIMIT:
-                out.append(Finding(name, a, b, ratio, TORQUE_LIMIT))
+            noise = np.mean(expected_var[w, ax]) + FLOOR_VAR[ax]
+            ratios = [(name, float(np.mean(held_out[w, ax] ** 2) / (noise + np.mean(pv[w, ax]))))]
+            if fitted is not None:
+                ratios.append((name + " (fitted)", float(np.mean(fitted[w, ax] ** 2) / noise)))
+            for label, ratio in ratios:
+                worst[label] = max(worst.get(label, 0.0), ratio)
+                if ratio > TORQUE_LIMIT:
+                    out.append(Finding(label, a, b, ratio, TORQUE_LIMIT))
     return out, worst
 
 

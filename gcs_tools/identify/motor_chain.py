@@ -27,6 +27,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.signal import lfilter
@@ -39,11 +41,12 @@ NAMES = ("thrust_gain[0]", "thrust_gain[1]", "thrust_gain[2]", "thrust_gain[3]",
 DELAY_GRID = np.arange(0.0, 0.0605, 0.002)
 EXPONENT_GRID = np.arange(1.0, 3.01, 0.1)
 SKIP_S = 3.0  # the filters' start-up at the beginning of the log is left out
-OUTLIER_K = 4.0
-HIGH_SHARE = 0.88
-HIGH_EPISODE_S = 0.3
+GUARD_ITERATIONS = 4  # fits with the guards' rows predicted anew from the last (stops when they settle)
+START_EXPONENT = 1.7  # the nominal chain's curve for the first prediction of the guards' rows
+GUARD_K = 2.0  # noise sigmas of margin to the guards' thresholds (guard_rows)
+HELD_TOL_N = 1e-3  # a reading repeated within this is a held one (float32 thrusts, inverted through the IIR)
+HELD_K = 2.0  # ... where the chain's thrust is within this many noise sigmas of a guard's threshold
 LC_STEP_N = 2.44 * 9.80665e-3  # the load cells' smallest step (sensors/load_cell.py)
-EPISODE_S = 0.3  # an outlier's episode: this long either side of it
 LOWER = np.array([0.3, 0.3, 0.3, 0.3, -3.0, 0.5, 0.0])
 UPPER = np.array([2.0, 2.0, 2.0, 2.0, 3.0, 4.0, 0.1])
 
@@ -120,39 +123,100 @@ class MotorChainModel:
         return y[self.row_in_lc], self.thrust(p, self.voltages(p[6], self.k_rows))
 
 
-def high_rows(measured: np.ndarray, rc: RigConstants, dt: float) -> np.ndarray:
-    """Rows within :data:`HIGH_EPISODE_S` of a load-cell thrust above :data:`HIGH_SHARE` of the ceiling."""
-    bad = np.any(measured > HIGH_SHARE * rc.f_ceiling, axis=1)
-    w = int(round(HIGH_EPISODE_S / dt))
-    c = np.concatenate([[0], np.cumsum(bad)])
-    i = np.arange(bad.size)
-    return (c[np.clip(i + w + 1, 0, bad.size)] - c[np.clip(i - w, 0, bad.size)]) > 0
+def guard_rows(model: "MotorChainModel", p: np.ndarray, k: float | None = None) -> np.ndarray:
+    """Rows whose filtered reading the firmware's load-cell guards may have touched, **predicted** by the
+    chain at ``p`` (never chosen from the measured readings or the residuals, which would bias the fit).
+
+    The guards (estimation/load_cell_filter.py) replace a raw reading by the last accepted one when it
+    jumps by more than ``lc_jump_N`` from it or lies above ``lc_max_N``; the chain has no model of that
+    (whether a reading trips depends on its noise). A load-cell sample is at risk where the chain's
+    thrust jumps within ``k`` noise sigmas of the threshold since the last sample, or lies within ``k``
+    sigmas of the upper bound; a row is left out while its filtered reading still remembers such a
+    sample: the IIR's memory down to 1 % plus the guard's re-accept count.
+    """
+    k = GUARD_K if k is None else k
+    rc = model.rc
+    x = model.thrust(p, model.voltages(p[6], model.k_lc))
+    sd = cell_noise_sd(rc, x)
+    jump = np.abs(np.diff(x, axis=0, prepend=x[:1]))
+    sdd = np.sqrt(sd ** 2 + np.vstack([sd[:1], sd[:-1]]) ** 2)
+    risk = np.any((jump > rc.lc_jump_N - k * sdd) | (x > rc.lc_max_N - k * sd), axis=1)
+    return rows_after(risk, model)
+
+
+def held_samples(log, model: "MotorChainModel", p: np.ndarray) -> np.ndarray | None:
+    """Load-cell samples the firmware's guards held, **seen** in the log, or None when the log's rows do
+    not show every sample (rows slower than the load cells: :func:`guard_rows` predicts them instead).
+
+    The filtered reading ``y_j = y_{j-1} + alpha (x_j - y_{j-1})`` is inverted sample by sample to the
+    reading ``x_j`` the filter took in. A reading a guard rejected is replaced by the last accepted one
+    (estimation/load_cell_filter.py), so it repeats it to the float's precision and, having been
+    rejected, lies a guard's threshold from the thrust; a reading that repeats by chance (the 10-bit
+    counts) lies within the noise of it. Held: repeated within :data:`HELD_TOL_N`, and the chain's thrust
+    at ``p`` either within :data:`HELD_K` noise sigmas of the jump guard's threshold away from it or of the
+    upper guard. (n_lc, 4) bool.
+    """
+    rc = model.rc
+    a = rc.lc_alpha
+    n_lc = model.k_lc.size
+    first = np.full(n_lc, -1)
+    rows = np.arange(model.row_in_lc.size)
+    ok = model.row_in_lc >= 0
+    # the first row at or after each sample shows it (if no later sample came first)
+    j, idx = np.unique(model.row_in_lc[ok], return_index=True)
+    first[j] = rows[ok][idx]
+    seen = first >= 0
+    if not 0.0 < a < 1.0 or seen[1:].mean() < 0.98:
+        return None
+    y = np.full((n_lc, 4), np.nan)
+    y[seen] = log.thrust[first[seen]]
+    x = np.full((n_lc, 4), np.nan)
+    x[1:] = y[:-1] + (y[1:] - y[:-1]) / a
+    f = model.thrust(p, model.voltages(p[6], model.k_lc))
+    sd = cell_noise_sd(rc, f)
+    # rejected: the reading jumped by more than the guard's threshold from the value now repeated, or lay
+    # above the guard's ceiling
+    far = (np.abs(x - f) > rc.lc_jump_N - HELD_K * sd) | (f > rc.lc_max_N - HELD_K * sd)
+    repeat = np.zeros((n_lc, 4), dtype=bool)
+    repeat[1:] = np.abs(x[1:] - x[:-1]) <= HELD_TOL_N
+    return np.nan_to_num(repeat & far, nan=False).astype(bool)
+
+
+def rows_after(samples: np.ndarray, model: "MotorChainModel") -> np.ndarray:
+    """Rows whose filtered reading still remembers one of ``samples`` (n_lc,) bool: the IIR's memory down
+    to 1 % plus the guard's re-accept count."""
+    rc = model.rc
+    a = rc.lc_alpha
+    memory = (int(math.ceil(math.log(0.01) / math.log(1.0 - a))) if 0.0 < a < 1.0 else 1) + max(rc.lc_reaccept, 1)
+    c = np.concatenate([[0], np.cumsum(samples)])
+    i = np.arange(samples.size)
+    dilated = (c[i + 1] - c[np.clip(i + 1 - memory, 0, samples.size)]) > 0
+    return dilated[model.row_in_lc]
+
+
+def excluded_rows(log, model: "MotorChainModel", p: np.ndarray) -> np.ndarray:
+    """Rows the chain cannot explain because a guard held a reading: the held samples where the log shows
+    every sample (:func:`held_samples`), else as the chain at ``p`` predicts them (:func:`guard_rows`)."""
+    held = held_samples(log, model, p)
+    if held is None:
+        return guard_rows(model, p)
+    return rows_after(np.any(held, axis=1), model)
+
+
+def cell_noise_sd(rc: RigConstants, thrust: np.ndarray) -> np.ndarray:
+    """Standard deviation (N) of one raw load-cell reading at the motors' ``thrust`` (N): the datasheet's
+    floor plus the vibration that grows with rotor speed squared, i.e. with thrust (sensors/load_cell.py)."""
+    return rc.lc_noise_floor_N + rc.lc_vibration_N * np.maximum(thrust, 0.0) / (rc.kf * rc.rotor_speed_hover ** 2)
 
 
 def cell_noise_var(rc: RigConstants, thrust: np.ndarray) -> np.ndarray:
     """Variance (N^2) of a filtered load-cell reading's own noise at the motors' ``thrust`` (N): the
     datasheet's floor plus the vibration that grows with rotor speed squared (i.e. thrust,
     sensors/load_cell.py), the 10-bit step's rounding, through the IIR (``alpha / (2 - alpha)``)."""
-    sig = rc.lc_noise_floor_N + rc.lc_vibration_N * np.maximum(thrust, 0.0) / (rc.kf * rc.rotor_speed_hover ** 2)
+    sig = cell_noise_sd(rc, thrust)
     quant = (LC_STEP_N ** 2) / 12.0
     a = rc.lc_alpha
     return (sig ** 2 + quant) * (a / (2.0 - a) if a > 0.0 else 1.0)
-
-
-def outlier_rows(resid: np.ndarray, use: np.ndarray, dt: float, sd: np.ndarray) -> np.ndarray:
-    """Rows within :data:`EPISODE_S` of a residual beyond :data:`OUTLIER_K` robust sigmas (the median
-    absolute deviation of the residuals over their expected noise ``sd``): a reading the guard held for
-    longer than the chain predicts, a spike."""
-    z = resid / sd
-    running = use & np.all(sd > 1.5 * sd.min(axis=0), axis=1)  # the motors running: the noise model's scale
-    ref = running if running.sum() > 100 else use
-    r = np.abs(z - np.median(z[ref], axis=0))
-    mad = 1.4826 * np.median(r[ref], axis=0)
-    bad = np.any(r > OUTLIER_K * mad, axis=1) & use
-    w = int(round(EPISODE_S / dt))
-    c = np.concatenate([[0], np.cumsum(bad)])
-    i = np.arange(bad.size)
-    return (c[np.clip(i + w + 1, 0, bad.size)] - c[np.clip(i - w, 0, bad.size)]) > 0
 
 
 def _grid_start(model, use, y, base, fixed) -> np.ndarray:
@@ -214,9 +278,14 @@ def fit_motor_chain(log, rc: RigConstants, rows: np.ndarray | None = None, fixed
     def resid(q):
         return (model.filtered(full(q))[0][use] - y).ravel()
 
-    # near the ceiling the firmware discards readings above it and its jump guard holds others: the
-    # filtered reading is biased there, so those rows are left out
-    use &= ~high_rows(log.thrust, rc, log.dt)
+    # where the firmware's guards may have held a reading the chain has no model of it: those rows are left
+    # out, as the chain predicts them (first from a nominal chain for the grid, then from the fit itself)
+    nominal = base.copy()
+    for i, v in ((5, START_EXPONENT), (6, rc.delay_preset)):
+        if i not in fixed:
+            nominal[i] = v
+    use0 = use.copy()
+    use = use0 & ~excluded_rows(log, model, nominal)
     y = log.thrust[use]
     best = _grid_start(model, use, y, base, fixed)
     steps = np.array([1e-4 if i < 6 else 2e-3 for i in free])
@@ -226,21 +295,17 @@ def fit_motor_chain(log, rc: RigConstants, rows: np.ndarray | None = None, fixed
         lags = bandwidth(e, log.dt, groups=4)
         p = base
     else:
-        sol = least_squares(resid, best[free], bounds=(LOWER[free], UPPER[free]), method="trf", x_scale="jac",
-                            xtol=1e-10, ftol=1e-10, diff_step=steps)
-        p = full(sol.x)
-        # where the load cells' jump guard held a reading (estimation/load_cell_filter.py) the chain has no
-        # model of: an episode of residuals far beyond the rest, left out and fitted once more (twice)
-        for _ in range(2):
-            pred, true = model.filtered(p)
-            again = use & ~outlier_rows(pred - log.thrust, use, log.dt, np.sqrt(cell_noise_var(model.rc, true)))
-            if again.sum() == use.sum():
+        q = best[free]
+        for _ in range(GUARD_ITERATIONS):
+            again = use0 & ~excluded_rows(log, model, full(q))
+            if _ > 0 and np.array_equal(again, use):
                 break
             use = again
             y = log.thrust[use]
-            sol = least_squares(resid, sol.x, bounds=(LOWER[free], UPPER[free]), method="trf", x_scale="jac",
+            sol = least_squares(resid, q, bounds=(LOWER[free], UPPER[free]), method="trf", x_scale="jac",
                                 xtol=1e-10, ftol=1e-10, diff_step=steps)
-            p = full(sol.x)
+            q = sol.x
+        p = full(sol.x)
         e = sol.fun
         lags = bandwidth(e, log.dt, groups=4)
         cov[np.ix_(free, free)] = hac_covariance(sol.jac, e, lags, groups=4)

@@ -46,6 +46,8 @@ class RigConstants:
     rotor_speed_hover: float  # rad/s of the load cells' vibration scale
     delay_preset: float     # s (start of the search only)
     lc_jump_N: float        # the load cells' jump guard (estimation/load_cell_filter.py), N
+    lc_max_N: float         # the load cells' upper guard: readings above are discarded, N
+    lc_reaccept: int        # samples after which the guard accepts a reading again (0: never)
 
 
 def rig_constants(cfg) -> RigConstants:
@@ -74,5 +76,6 @@ def rig_constants(cfg) -> RigConstants:
         coulomb_smoothing=cfg["joint.coulomb_smoothing"], noise_corner_hz=cfg["disturbance.torque_noise_corner_hz"],
         lc_noise_floor_N=lc["noise_floor_grf"] * GRAM_FORCE_N, lc_vibration_N=lc["vibration_grf_at_hover"] * GRAM_FORCE_N,
         rotor_speed_hover=lc["rotor_speed_hover_rad_s"], delay_preset=cfg["control.actuation_delay"],
-        lc_jump_N=est["jump_threshold_grf"] * GRAM_FORCE_N,
+        lc_jump_N=est["jump_threshold_grf"] * GRAM_FORCE_N, lc_max_N=est["max_thrust_grf"] * GRAM_FORCE_N,
+        lc_reaccept=int(est["reaccept_after"]),
     )

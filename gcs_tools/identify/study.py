@@ -22,23 +22,12 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from gcs_tools.errors import EXIT_OK
+from gcs_tools.identify.plausible import PLAUSIBLE_RANGES
 
 SEED_BASE = 1000
 DRAW_SEED = 27  # the random draws of the hidden values
-#: key -> (low, high): where a rig of this build plausibly is (the schema's ranges are far wider)
-DRAW_RANGES = {
-    "motors.thrust_gain[0]": (0.9, 1.1), "motors.thrust_gain[1]": (0.9, 1.1),
-    "motors.thrust_gain[2]": (0.9, 1.1), "motors.thrust_gain[3]": (0.9, 1.1),
-    "motors.thrust_bias_grf": (-100.0, 0.0),
-    "motors.curve_exponent": (1.3, 2.1),
-    "control.actuation_delay": (0.005, 0.025),
-    "joint.viscous[0]": (0.0, 0.06), "joint.viscous[1]": (0.0, 0.06), "joint.viscous[2]": (0.0, 0.06),
-    "joint.coulomb[0]": (0.0, 0.1), "joint.coulomb[1]": (0.0, 0.1), "joint.coulomb[2]": (0.0, 0.05),
-    "joint.cog_offset[0]": (-0.015, 0.015), "joint.cog_offset[1]": (-0.015, 0.015),
-    "joint.cog_offset[2]": (0.01, 0.05),
-    "disturbance.torque_noise[0]": (0.005, 0.04), "disturbance.torque_noise[1]": (0.005, 0.04),
-    "disturbance.torque_noise[2]": (0.005, 0.04),
-}
+#: the hidden values are drawn where a rig of this build plausibly is
+DRAW_RANGES = PLAUSIBLE_RANGES
 #: name -> (overrides of the log's rig, effects the estimator holds at the preset)
 MISMATCHES = {
     "matched (the preset)": ({}, ()),
@@ -87,9 +76,9 @@ def fly_and_identify(overrides: dict, seed: int, hold=(), strategy: str = "flc")
 
 
 def _draw_job(args):
-    i, values = args
-    r = fly_and_identify(as_overrides(values), SEED_BASE + i)
-    return i, {e.key: (e.value, e.lo, e.hi) for e in r.estimates}, [f.text() for f in r.findings], r.wall_s
+    seed, values = args
+    r = fly_and_identify(as_overrides(values), seed)
+    return seed, {e.key: (e.value, e.lo, e.hi) for e in r.estimates}, [f.text() for f in r.findings], r.wall_s
 
 
 def _mismatch_job(args):
@@ -98,39 +87,50 @@ def _mismatch_job(args):
     return name, seed, [f.text() for f in r.findings], r.wall_s
 
 
-def run_study(n: int, workers: int = 2, mismatch_seeds: int = 2) -> dict:
-    ds = draws(n)
-    jobs = list(enumerate(ds))
-    mjobs = [(name, MISMATCHES[name], SEED_BASE + 500 + s) for name in MISMATCHES for s in range(mismatch_seeds)]
+def run_study(n: int, workers: int = 2, mismatch_seeds: int = 2, study_seed: int = 0) -> dict:
+    """``study_seed`` 0: the draws and noise seeds the intervals' scales were measured on; any other value
+    draws other hidden values and flies other noise seeds (an out-of-sample check of the intervals)."""
+    ds = draws(n, DRAW_SEED + study_seed)
+    base = SEED_BASE + 10_000 * study_seed
+    jobs = [(base + i, d) for i, d in enumerate(ds)]
+    mjobs = [(name, MISMATCHES[name], base + 500 + s) for name in MISMATCHES for s in range(mismatch_seeds)]
     with ProcessPoolExecutor(max_workers=workers) as ex:
         res = list(ex.map(_draw_job, jobs))
         mres = list(ex.map(_mismatch_job, mjobs))
     rows = {}
     for key, (lo, hi) in DRAW_RANGES.items():
-        inside, errs = 0, []
-        for i, est, _, _ in res:
+        inside, errs, zs = 0, [], []
+        for k, (_, est, _, _) in enumerate(res):
             v, a, b = est[key]
-            truth = ds[i][key]
+            truth = ds[k][key]
             inside += a <= truth <= b
             errs.append(abs(v - truth) / (hi - lo))
+            if b > a:  # the stated sigma: the 95 % interval's half-width over 1.96
+                zs.append((v - truth) / ((b - a) / (2 * 1.96)))
         rows[key] = {"coverage": inside / n, "median_error_pct": 100.0 * float(np.median(errs)),
-                     "within_10pct": float(np.mean(np.array(errs) <= 0.1))}
+                     "within_10pct": float(np.mean(np.array(errs) <= 0.1)),
+                     "scatter_over_sigma": float(np.sqrt(np.mean(np.square(zs)))) if zs else None}
     flagged = sum(1 for _, _, f, _ in res if f)
-    return {"n": n, "rows": rows, "matched_draws_flagged": flagged,
+    return {"n": n, "study_seed": study_seed, "seeds": [base, base + n - 1], "rows": rows,
+            "matched_draws_flagged": flagged,
             "fit_wall_s_median": float(np.median([w for *_, w in res])),
             "mismatch": [{"case": name, "seed": seed, "flagged": bool(f), "findings": f, "wall_s": w}
                          for name, seed, f, w in mres],
-            "draws": ds, "estimates": {i: est for i, est, _, _ in res}}
+            "draws": ds, "estimates": {seed: est for seed, est, _, _ in res},
+            "findings": {seed: f for seed, _, f, _ in res}}
 
 
 def table_lines(study: dict) -> list[str]:
-    lines = [f"calibration study: {study['n']} hidden draws on hilms (sysid flight, FLC), logs from seeds "
-             f"{SEED_BASE}..{SEED_BASE + study['n'] - 1}",
-             f"{'parameter':30s} {'range':>18s} {'coverage of 95 %':>17s} {'median error':>13s} {'within 10 %':>12s}"]
+    a, b = study["seeds"]
+    lines = [f"calibration study: {study['n']} hidden draws on hilms (sysid flight, FLC), study seed "
+             f"{study['study_seed']}, logs from seeds {a}..{b}",
+             f"{'parameter':30s} {'range':>18s} {'coverage of 95 %':>17s} {'median error':>13s} {'within 10 %':>12s} "
+             f"{'scatter / sigma':>16s}"]
     for key, r in study["rows"].items():
         lo, hi = DRAW_RANGES[key]
+        zs = "-" if r["scatter_over_sigma"] is None else f"{r['scatter_over_sigma']:.2f}"
         lines.append(f"{key:30s} {f'{lo:g}..{hi:g}':>18s} {r['coverage']:>16.0%} {r['median_error_pct']:>11.1f} % "
-                     f"{r['within_10pct']:>11.0%}")
+                     f"{r['within_10pct']:>11.0%} {zs:>16s}")
     lines.append(f"matched draws the model check flagged: {study['matched_draws_flagged']} of {study['n']}; "
                  f"median fit wall time {study['fit_wall_s_median']:.1f} s")
     lines.append("model check on the mismatched cases (the estimator's model lacks the effect or holds it):")
@@ -144,7 +144,7 @@ def table_lines(study: dict) -> list[str]:
 def cmd_study(args) -> int:
     from protocol.atomic_file import atomic_write_text
 
-    study = run_study(args.calibration_study, workers=args.workers or 2)
+    study = run_study(args.calibration_study, workers=args.workers or 2, study_seed=args.study_seed)
     for line in table_lines(study):
         print(line)
     if args.json:

@@ -12,7 +12,7 @@ as one does with a filtered output, every term is passed through the same filter
 the log's load cells say, and ``H[w']`` is the difference quotient of ``H[w]`` (no differentiation
 of a noisy signal). The body rates (ATTITUDE) are interpolated to the load cells' sample times and
 filtered as they were; gravity in B, ``g_B = g (sin theta, cos theta sin phi, cos theta cos phi)``,
-from the attitude estimate. The balance is linear in
+from the attitude estimate smoothed with the gyros after the flight (gcs_tools/identify/attitude_smoother.py). The balance is linear in
 ``(I_xx, I_yy, I_zz, c_v (3), c_c (3), m r_cg (3))``: ordinary least squares, each axis weighted by
 the inverse of its residual spread (two steps), with the HAC covariance of gcs_tools/identify/hac.py.
 The disarmed swings carry the friction and the pendulum with no motor torque and no random torque;
@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import lfilter
 
+from gcs_tools.identify.attitude_smoother import smoothed_attitude
 from gcs_tools.identify.hac import bandwidth, hac_covariance, long_run_covariance
 from gcs_tools.identify.motor_chain import cell_noise_var
 from gcs_tools.identify.rig_constants import RigConstants
@@ -64,22 +65,41 @@ class TorqueFit:
         """(n_rows, 3) the residual variance the noise model expects at each row."""
         return self.kappa * (self.noise_sigma[None, :] * self.load[:, None]) ** 2 + self.lc_var
 
-    def held_out(self, window_s: float, t: np.ndarray) -> np.ndarray:
-        """Residuals of each window of ``window_s`` predicted by the regression fitted without it."""
+    def held_out(self, window_s: float, t: np.ndarray, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """Residuals of each window of ``window_s`` predicted by the regression fitted without it, and the
+        variance of that prediction (n_rows, 3) each.
+
+        The prediction's variance is the fit's: ``x C x^T`` with ``C`` the covariance of the parameters
+        fitted without the window, built as the sandwich of the whole fit with the bread of the rows
+        left (the meat scaled to their number) and widened by ``scale`` (the intervals' scale,
+        gcs_tools/identify/regression.py). A window that alone carries an effect (the yaw spin-down, the
+        only place the yaw friction shows) is predicted poorly by the rest even with the right model;
+        its variance says so, and the model check weighs the residual against it.
+        """
         out = np.full(self.Y.shape, np.nan)
+        pvar = np.full(self.Y.shape, np.nan)
         edges = np.arange(np.floor(t[0]), t[-1] + window_s, window_s)
         Xf = self.X[:, :, self.free]
         wt = self.axis_weight
+        k = len(self.free)
+        Aall = (Xf[self.used] * wt[None, :, None]).reshape(-1, k)
+        bread_all = Aall.T @ Aall
+        cf = self.cov[np.ix_(self.free, self.free)]
+        meat_all = bread_all @ cf @ bread_all
+        n_all = self.used.sum()
         for a, b in zip(edges[:-1], edges[1:]):
             w = (t >= a) & (t < b)
             train = self.used & ~w
             if train.sum() < 100 or not np.any(w & self.used):
                 continue
-            A = (Xf[train] * wt[None, :, None]).reshape(-1, len(self.free))
+            A = (Xf[train] * wt[None, :, None]).reshape(-1, k)
             y = (self.Y[train] * wt[None, :]).ravel()
             beta = np.linalg.lstsq(A, y, rcond=None)[0]
             out[w] = self.Y[w] - Xf[w] @ beta
-        return out
+            bi = np.linalg.pinv(A.T @ A)
+            c = bi @ (meat_all * (train.sum() / n_all)) @ bi * scale ** 2
+            pvar[w] = np.einsum("rak,kl,ral->ra", Xf[w], c, Xf[w])
+        return out, pvar
 
 
 def _iir(x: np.ndarray, alpha: float) -> np.ndarray:
@@ -109,8 +129,9 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     t_lc = np.arange(t[0], t[-1] + 1e-9, dt_lc)
     idx = np.clip(np.searchsorted(t_lc, t - 1e-9), 0, t_lc.size - 1)  # the load-cell sample of each row
     w = np.column_stack([np.interp(t_lc, t, log.omega[:, i]) for i in range(3)])
-    phi = np.interp(t_lc, t, log.euler[:, 0])
-    theta = np.interp(t_lc, t, log.euler[:, 1])
+    euler = smoothed_attitude(t, log.euler, log.omega)
+    phi = np.interp(t_lc, t, euler[:, 0])
+    theta = np.interp(t_lc, t, euler[:, 1])
     gB = rc.g * np.column_stack([np.sin(theta), np.cos(theta) * np.sin(phi), np.cos(theta) * np.cos(phi)])
     a = rc.lc_alpha
     Hw = _iir(w, a)

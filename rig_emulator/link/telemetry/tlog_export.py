@@ -15,7 +15,8 @@ into the messages the live rig streams, built by the link's own message builders
 (``telemetry_*.py``) from a :class:`~rig_emulator.simulation.live.RigSnapshot` per log row,
 stamped with the simulated time (``time_boot_ms`` / ``time_usec`` and the record
 timestamp = ``epoch_s`` + simulated time), every message at the log rate
-(``sim.log_rate_hz``) and HEARTBEAT / HOME_POSITION once per simulated second.
+(``sim.log_rate_hz``; above 100 Hz only ATTITUDE, SERVO_OUTPUT_RAW and HILMS_LOAD_CELLS, the others at
+100 Hz) and HEARTBEAT / HOME_POSITION once per simulated second.
 
 Reading: the rig's own figures (:meth:`SimResult.mean_errors`) are computed from what the
 controllers were fed (series ``pos``, ``euler``: the rig's estimates, or the truth with
@@ -59,7 +60,8 @@ DEFAULT_HOME = Home(35.7, 51.4, 1200.0)  # the live rig's default (rig_emulator/
 COMPID = M.MAV_COMP_ID_AUTOPILOT1
 MISSION_ITEM_LOCAL_SCALE = 1e4  # MISSION_ITEM_INT x/y in local frames: metres * 1e4
 
-#: Streams written at every log row, in this order (builders of the live link).
+#: Streams written at every log row, in this order (builders of the live link); those not in
+#: :data:`FULL_RATE_STREAMS` at most at :data:`OTHER_STREAMS_MAX_HZ`.
 ROW_STREAMS = (
     ("attitude", A.attitude),
     ("attitude_target", A.attitude_target),
@@ -71,6 +73,13 @@ ROW_STREAMS = (
     ("named_value_float", S.named_value_float),
     ("global_position_int", P.global_position_int),
 )
+
+
+#: What the identification needs at the controller's rate (gcs_tools/identify/sysid_log.py): a log rate above
+#: 100 Hz (the identification flight logs at 500 Hz) is for them; the other streams stay at a ground
+#: station's usual rates, which keeps such a log a quarter of the size and its export as much faster.
+FULL_RATE_STREAMS = ("attitude", "servo_output_raw", "hilms_load_cells")
+OTHER_STREAMS_MAX_HZ = 100.0
 
 
 def tlog_usec(t_unix_s: float) -> int:
@@ -196,6 +205,7 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1, label: str 
     n = series["t"].shape[0]
     guidance = cfg["guidance.type"]
     next_second = -math.inf
+    other_div = max(1, int(round(float(cfg["sim.log_rate_hz"]) / OTHER_STREAMS_MAX_HZ)))
     for k in range(n):
         snap = row_snapshot(series, k, guidance, cfg["sim.physics_rate_hz"])
         t = snap.time_s
@@ -206,11 +216,14 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1, label: str 
             next_second = math.floor(t) + 1.0
             yield t, T.heartbeat(snap, ctx)
             yield t, P.home_position(snap, ctx)
-        for _, build in ROW_STREAMS:
-            out = build(snap, ctx)
-            for msg in out if isinstance(out, list) else [out]:
-                yield t, msg
-        yield t, P.sim_state(snap, ctx)
+        every = k % other_div == 0
+        for name, build in ROW_STREAMS:
+            if every or name in FULL_RATE_STREAMS:
+                out = build(snap, ctx)
+                for msg in out if isinstance(out, list) else [out]:
+                    yield t, msg
+        if every:
+            yield t, P.sim_state(snap, ctx)
 
 
 def export_tlog(result, path, home: Home = DEFAULT_HOME, sysid: int = 1, epoch_s: float = 0.0,

@@ -3,14 +3,20 @@
 is deterministic), the identification flight (scenario sysid) flown with a noise seed of its own and
 written as a .tlog, the effects recovered from the log alone with the hilms preset as the base (which
 knows none of the drawn values), and checked against the truth: the error and whether the reported 95 %
-interval holds it. The centre of gravity (3 axes) must be within 10 % of its range (its intervals are
-still too narrow: a strict expected failure); the motor chain, the delay and the joint's
-friction are a strict expected failure (they do not all pass yet: docs/how-to/identify.md); the random
-torque's level is not checked (the calibration study shows it over-estimated).
+interval holds it. The test's draws and seeds are its own: the intervals' scales were measured on the
+calibration study's (gcs_tools/identify/regression.py, ``INTERVAL_SCALE_*``).
 
-Three draws cost about a minute of CPU (three 90 s flights at 20-30x real time, the .tlog export, three
-fits of about 14 s). The calibration study (`rig-gcs identify --calibration-study N`) measures the same
-over more draws; docs/how-to/identify.md has its table.
+* the centre of gravity (3 axes), the motor chain (gains, bias, curve, delay) and the roll and pitch
+  Coulomb friction: within 10 % of their plausible range;
+* every effect but the random torque: its 95 % interval holds the truth in at least 85 % of the
+  (parameter, draw) pairs, and the model check finds each log explained;
+* the viscous friction and the yaw Coulomb friction are within 10 % of their range in only 55-75 % of
+  the calibration study's draws, and the random torque's level in 30-75 %: their intervals are checked,
+  not that bound (docs/how-to/identify.md, "How far to trust it").
+
+Three draws cost about a minute and a half of CPU (three 90 s flights at 20-30x real time, the .tlog
+export at 500 Hz, three fits of about 14 s). The calibration study (`rig-gcs identify --calibration-study
+N`) measures the same over more draws; docs/how-to/identify.md has its table.
 """
 
 import json
@@ -27,12 +33,11 @@ from rig_emulator.simulation.run import Simulation
 N_DRAWS = 3
 DRAW_SEED = 20261128  # the test's own draws, not the study's
 LOG_SEED = 4100  # noise seeds of the flights: the fit never sees them
-#: recovered blind: within WITHIN of the range, and the 95 % intervals hold the truth often enough
-COG = [k for k in DRAW_RANGES if k.startswith("joint.cog_offset")]
-#: not yet: the motor chain (where the motors run near the load cells' ceiling, the firmware's guards bias
-#: the filtered readings), the delay's interval (too narrow), the friction (viscous and Coulomb trade off
-#: where the swings are short); docs/how-to/identify.md, "How far to trust it"
-REST = [k for k in DRAW_RANGES if k.startswith(("motors.", "control.", "joint.viscous", "joint.coulomb"))]
+#: recovered blind within WITHIN of their range
+CLOSE = [k for k in DRAW_RANGES if k.startswith(("joint.cog_offset", "motors.", "control."))] + [
+    "joint.coulomb[0]", "joint.coulomb[1]"]
+#: their intervals hold the truth (COVERAGE of the pairs)
+INTERVALS = [k for k in DRAW_RANGES if not k.startswith("disturbance.")]
 WITHIN = 0.10
 COVERAGE = 0.85  # of the (parameter, draw) pairs whose 95 % interval holds the truth
 
@@ -57,33 +62,28 @@ def blind_fits(tmp_path_factory):
     return out
 
 
-def _check(blind_fits, keys, coverage=True):
-    inside, total, misses = 0, 0, []
+def test_recovered_blind_within_a_tenth_of_their_range(blind_fits):
+    misses = []
     for hidden, est, _ in blind_fits:
-        for key in keys:
+        for key in CLOSE:
             lo, hi = DRAW_RANGES[key]
+            if abs(est[key]["value"] - hidden[key]) > WITHIN * (hi - lo):
+                misses.append((key, est[key]["value"], hidden[key]))
+    assert not misses, misses
+
+
+def test_intervals_hold_the_truth(blind_fits):
+    inside, misses = 0, []
+    for hidden, est, _ in blind_fits:
+        for key in INTERVALS:
             e = est[key]
-            assert abs(e["value"] - hidden[key]) <= WITHIN * (hi - lo), (key, e["value"], hidden[key])
-            total += 1
             if e["lo"] <= hidden[key] <= e["hi"]:
                 inside += 1
             else:
                 misses.append((key, hidden[key], e["lo"], e["hi"]))
-    if coverage:
-        assert inside / total >= COVERAGE, misses
+    assert inside / (len(blind_fits) * len(INTERVALS)) >= COVERAGE, misses
 
 
-def test_centre_of_gravity_recovered_blind(blind_fits):
-    _check(blind_fits, COG, coverage=False)
-
-
-@pytest.mark.xfail(strict=True, reason="the centre of gravity's intervals are too narrow: the attitude estimate's "
-                                       "error is not in them (docs/how-to/identify.md)")
-def test_centre_of_gravity_inside_its_intervals(blind_fits):
-    _check(blind_fits, COG)
-
-
-@pytest.mark.xfail(strict=True, reason="motor chain biased near the thrust ceiling, delay and friction intervals "
-                                       "too narrow (docs/how-to/identify.md)")
-def test_motor_chain_delay_and_friction_recovered_blind_within_their_intervals(blind_fits):
-    _check(blind_fits, REST)
+def test_matched_logs_are_explained(blind_fits):
+    for _, _, doc in blind_fits:
+        assert doc["findings"] == [], doc["findings"]
