@@ -16,7 +16,8 @@ Use (MAVProxy installed in the environment where hilms-sil is installed)::
     mavproxy.py --master=tcp:127.0.0.1:5760 --load-module=gcs_tools.mavproxy_px4modes
     # or, inside MAVProxy:  module load gcs_tools.mavproxy_px4modes
 
-Then ``mode POSCTL``, ``mode LOITER``, ``posctl``, ``mode 50593792`` (a PX4 custom_mode number) work.
+Then ``mode POSCTL``, ``mode LOITER``, ``posctl``, ``mode SYSID`` (the rig's identification flight),
+``mode 50593792`` (a PX4 custom_mode number) work.
 For any other autopilot the ``mode`` command is MAVProxy's own. Imported only by MAVProxy.
 """
 
@@ -25,15 +26,17 @@ from __future__ import annotations
 from MAVProxy.modules.lib import mp_module
 from pymavlink import mavutil
 
-from protocol.px4_custom_mode import split_custom_mode
+from protocol.px4_custom_mode import RIG_MODES, split_custom_mode
 
 
 def px4_mode_triple(arg: str):
-    """(base_mode, main_mode, sub_mode) of a PX4 mode name (pymavlink's px4_map, any case) or of a
-    PX4 custom_mode number (main mode in bits 16-23, sub mode in bits 24-31); None if neither."""
+    """(base_mode, main_mode, sub_mode) of a PX4 mode name (pymavlink's px4_map, any case), of a mode the
+    rig adds (``SYSID``, :data:`protocol.px4_custom_mode.RIG_MODES`) or of a PX4 custom_mode number (main mode in bits 16-23, sub mode in bits 24-31); None if neither."""
     name = arg.upper()
     if name in mavutil.px4_map:
         return tuple(int(v) for v in mavutil.px4_map[name])
+    if name in RIG_MODES:
+        return (int(mavutil.mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), *RIG_MODES[name])
     if arg.isdigit():
         return (int(mavutil.mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), *split_custom_mode(int(arg)))
     return None

@@ -13,3 +13,9 @@ def custom_mode(main: int, sub: int) -> int:
 def split_custom_mode(value: int) -> tuple[int, int]:
     """(main, sub) PX4 mode of a HEARTBEAT.custom_mode."""
     return (value >> 16) & 0xFF, (value >> 24) & 0xFF
+
+
+#: the flight modes the rig adds to PX4's (pymavlink's ``px4_map`` does not know them): name -> (main, sub).
+#: SYSID is the identification flight, in PX4's first external-mode slot (AUTO, PX4_CUSTOM_SUB_MODE_EXTERNAL1)
+#: where PX4 reports a mode an onboard component adds.
+RIG_MODES = {"SYSID": (4, 11)}

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import json
 import math
 import os
 import sys
@@ -359,6 +360,11 @@ def main(argv=None) -> int:
                     help="the command that made --reproduce's directory, quoted on the page")
     ap.add_argument("--reproduce-timing", metavar="FILE.json", help="its --timing file (time and runs on the page)")
     ap.add_argument("--machine", default="", help="the machine the expensive run was made on, in words, for the page")
+    ap.add_argument("--identify-study", metavar="FILE.json",
+                    help="also write docs/generated/identify-calibration.md from the --json file of "
+                         "`rig-gcs identify --calibration-study N`")
+    ap.add_argument("--identify-study-command", default="rig-gcs identify --calibration-study 20 --study-seed 1",
+                    help="the command that made --identify-study's file, quoted on the page")
     ap.add_argument("--stability", action="store_true",
                     help="also write docs/generated/stability.md (rig-gcs stability; needs the analysis extra)")
     args = ap.parse_args(argv)
@@ -373,6 +379,14 @@ def main(argv=None) -> int:
         path = OUT / "reproduce-summary.md"
         timing = Path(args.reproduce_timing) if args.reproduce_timing else None
         path.write_text(reproduce_page(Path(args.reproduce), args.reproduce_command, timing))
+        print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
+    if args.identify_study:
+        from gcs_tools.identify.study import markdown_page
+
+        path = OUT / "identify-calibration.md"
+        study = json.loads(Path(args.identify_study).read_text())
+        path.write_text(markdown_page(study, args.identify_study_command, args.machine))
         print(f"docs_gen: wrote {path.relative_to(ROOT)}")
         return 0
     if args.benchmarks:

@@ -41,6 +41,7 @@ NAMES = ("thrust_gain[0]", "thrust_gain[1]", "thrust_gain[2]", "thrust_gain[3]",
 DELAY_GRID = np.arange(0.0, 0.0605, 0.002)
 EXPONENT_GRID = np.arange(1.0, 3.01, 0.1)
 SKIP_S = 3.0  # the filters' start-up at the beginning of the log is left out
+BIAS_STARTS_N = (-0.25, -0.75)  # further starts of the first fit's thrust bias (fit_motor_chain)
 GUARD_ITERATIONS = 4  # fits with the guards' rows predicted anew from the last (stops when they settle)
 START_EXPONENT = 1.7  # the nominal chain's curve for the first prediction of the guards' rows
 GUARD_K = 2.0  # noise sigmas of margin to the guards' thresholds (guard_rows)
@@ -296,14 +297,24 @@ def fit_motor_chain(log, rc: RigConstants, rows: np.ndarray | None = None, fixed
         p = base
     else:
         q = best[free]
-        for _ in range(GUARD_ITERATIONS):
+        for it in range(GUARD_ITERATIONS):
             again = use0 & ~excluded_rows(log, model, full(q))
-            if _ > 0 and np.array_equal(again, use):
+            if it > 0 and np.array_equal(again, use):
                 break
             use = again
             y = log.thrust[use]
-            sol = least_squares(resid, q, bounds=(LOWER[free], UPPER[free]), method="trf", x_scale="jac",
-                                xtol=1e-10, ftol=1e-10, diff_step=steps)
+            starts = [q]
+            if it == 0 and 4 not in fixed:
+                # a stopped motor's voltage decays towards 0 without reaching it, and the rig adds the bias
+                # to any voltage above 0 (clipped at 0 thrust): the cost has a kink at a bias of 0, where a
+                # fit that starts above it can stall; so it also starts from below, and the best is kept
+                for b in BIAS_STARTS_N:
+                    q2 = q.copy()
+                    q2[free.index(4)] = b
+                    starts.append(q2)
+            sols = [least_squares(resid, q0, bounds=(LOWER[free], UPPER[free]), method="trf", x_scale="jac",
+                                  xtol=1e-10, ftol=1e-10, diff_step=steps) for q0 in starts]
+            sol = min(sols, key=lambda r: r.cost)
             q = sol.x
         p = full(sol.x)
         e = sol.fun

@@ -42,9 +42,9 @@ HOLDABLE = {
 
 
 #: How much wider the estimates scatter about the truth than the HAC covariance says, measured by the
-#: calibration study (``rig-gcs identify --calibration-study 24``, its column "scatter / sigma" with these
-#: set to 1): 1.4-2.1 for the motor chain, 1.3-1.9 for the torque balance, 2.1-2.4 for the random torque's
-#: level. The covariance is built from the residuals, which carry the load cells' noise; it cannot see the
+#: calibration study (``rig-gcs identify --calibration-study 20 [--study-seed S]``, its column "scatter /
+#: sigma" divided by these): 1.0-1.7 for the motor chain, 1.1-2.4 for the torque balance, 1.0-3.6 for the
+#: random torque's level, over the draws of study seeds 0 and 1. The covariance is built from the residuals, which carry the load cells' noise; it cannot see the
 #: errors of the regressors themselves (the attitude and the body rates the balance is written in, the
 #: commands between two log rows), which also move the estimates. As aircraft identification scales its
 #: Cramer-Rao bounds to the scatter of repeated manoeuvres (Morelli & Klein, *Aircraft System

@@ -141,6 +141,45 @@ def table_lines(study: dict) -> list[str]:
     return lines
 
 
+def _group(keys):
+    """Rows of the markdown table: the per-axis / per-motor keys of one effect on one line."""
+    out: dict = {}
+    for k in keys:
+        out.setdefault(k.split("[")[0], []).append(k)
+    return out
+
+
+def markdown_page(study: dict, command: str, machine: str) -> str:
+    """The study as the docs' generated page (docs/generated/identify-calibration.md)."""
+    a, b = study["seeds"]
+    lines = [f"Written by `python scripts/docs_gen.py --identify-study FILE.json` from the `--json` file of `{command}`: "
+             f"{study['n']} hidden draws on `hilms` (study seed {study['study_seed']}, flights with noise seeds "
+             f"{a}..{b}; the intervals' scales were measured on other draws and seeds), median fit "
+             f"{study['fit_wall_s_median']:.1f} s wall{' on ' + machine if machine else ''}.", "",
+             "| parameter | range drawn | 95 % interval holds the truth | median error (% of range) | "
+             "within 10 % of range | scatter / stated sigma |", "|---|---|---|---|---|---|"]
+    for base, keys in _group(study["rows"]).items():
+        rows = [study["rows"][k] for k in keys]
+        lo, hi = DRAW_RANGES[keys[0]]
+        name = base + (" " + " / ".join(k[len(base):] for k in keys) if len(keys) > 1 else "")
+        sig = " / ".join("-" if r["scatter_over_sigma"] is None else f"{r['scatter_over_sigma']:.2f}" for r in rows)
+        cov = " / ".join(f"{r['coverage']:.0%}" for r in rows)
+        err = " / ".join(f"{r['median_error_pct']:.1f}" for r in rows)
+        close = " / ".join(f"{r['within_10pct']:.0%}" for r in rows)
+        lines.append(f"| {name} | {lo:g}..{hi:g} | {cov} | {err} | {close} | {sig} |")
+    lines += ["", f"Model check: {study['matched_draws_flagged']} of {study['n']} matched draws flagged.", "",
+              "| log | seed | model check |", "|---|---|---|"]
+    for m in study["mismatch"]:
+        what = ("flagged: " + "; ".join(m["findings"][:2]) + (" ..." if len(m["findings"]) > 2 else "")
+                if m["flagged"] else "silent")
+        lines.append(f"| {m['case']} | {m['seed']} | {what} |")
+    flagged = [(seed, f) for seed, f in study.get("findings", {}).items() if f]
+    if flagged:
+        lines += ["", "Matched draws flagged:", ""]
+        lines += [f"* seed {seed}: " + "; ".join(f[:2]) for seed, f in flagged]
+    return "\n".join(lines) + "\n"
+
+
 def cmd_study(args) -> int:
     from protocol.atomic_file import atomic_write_text
 

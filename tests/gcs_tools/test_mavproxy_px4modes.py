@@ -15,3 +15,10 @@ def test_every_listed_name_and_its_custom_mode_number_give_the_same_main_and_sub
         assert MD.split_custom_mode(custom) == (main, sub)
         assert px4_mode_triple(str(custom))[1:] == (main, sub)
     assert px4_mode_triple("GUIDED") is None and px4_mode_triple("-1") is None
+
+
+def test_the_rigs_own_mode_is_named_as_the_rig_reports_it():
+    base, main, sub = px4_mode_triple("sysid")
+    assert base == mavutil.mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+    assert MD.custom_mode(main, sub) == MD.custom_mode(MD.AUTO, MD.AUTO_SYSID)
+    assert MD.MODES[(main, sub)].name == "AUTO.SYSID"

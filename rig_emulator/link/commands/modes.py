@@ -26,14 +26,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from protocol.px4_custom_mode import custom_mode, split_custom_mode  # noqa: F401 - the rig's names for them
+from protocol.px4_custom_mode import RIG_MODES, custom_mode, split_custom_mode  # noqa: F401 - the rig's names for them
 
 MANUAL, ALTCTL, POSCTL, AUTO, ACRO, OFFBOARD, STABILIZED, RATTITUDE = 1, 2, 3, 4, 5, 6, 7, 8
 AUTO_READY, AUTO_TAKEOFF, AUTO_LOITER, AUTO_MISSION, AUTO_RTL, AUTO_LAND = 1, 2, 3, 4, 5, 6
 AUTO_RTGS, AUTO_FOLLOW_TARGET, AUTO_PRECLAND = 7, 8, 9
 #: the identification flight's mode: PX4's first external-mode slot (PX4_CUSTOM_SUB_MODE_EXTERNAL1), where
 #: PX4 reports a mode an onboard component adds (ROS 2 external modes), named in AVAILABLE_MODES
-AUTO_SYSID = 11
+AUTO_SYSID = RIG_MODES["SYSID"][1]
 POSCTL_ORBIT = 1
 
 # MAV_STANDARD_MODE values (common.xml)
