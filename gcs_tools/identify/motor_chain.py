@@ -69,19 +69,33 @@ class MotorChainFit:
         return np.sqrt(np.diag(self.cov))
 
 
+def grid_origin(rc: RigConstants, *times: np.ndarray) -> float:
+    """Where the fine grid of a log starts: a step on which both a control update and a load-cell sample
+    fall (the rig counts both from its step 0), at or before the first of ``times`` (s)."""
+    period = rc.dt * math.lcm(rc.ctrl_div, rc.lc_decim)
+    return math.floor(min(float(x[0]) for x in times) / period + 1e-9) * period
+
+
 class MotorChainModel:
     """The chain of the module doc for one log's commands (precomputed once, evaluated per parameter)."""
 
-    def __init__(self, t: np.ndarray, v_cmd: np.ndarray, rc: RigConstants):
+    def __init__(self, t: np.ndarray, v_cmd: np.ndarray, rc: RigConstants, t_cmd: np.ndarray | None = None,
+                 t_cells: np.ndarray | None = None):
+        """``t`` the rows' times, ``v_cmd`` the commands each row carries; ``t_cmd`` / ``t_cells`` when the
+        commands and the load-cell readings were taken (default: the rows' times)."""
         self.rc = rc
         dt = rc.dt
-        k_rows = np.round((t - t[0]) / dt).astype(np.int64)
-        n_fine = int(k_rows[-1]) + 1
+        t_cmd = t if t_cmd is None else t_cmd
+        t_cells = t if t_cells is None else t_cells
+        self.t0 = grid_origin(rc, t, t_cmd, t_cells)
+        k_rows = np.round((t - self.t0) / dt).astype(np.int64)
+        k_cmd, first = np.unique(np.round((t_cmd - self.t0) / dt).astype(np.int64), return_index=True)
+        n_fine = int(max(k_rows[-1], k_cmd[-1])) + 1
         kf = np.arange(n_fine)
         k_ctrl = (kf // rc.ctrl_div) * rc.ctrl_div  # the control update each step holds
         u = np.empty((n_fine, 4))
         for i in range(4):
-            u[:, i] = np.interp(k_ctrl, k_rows, v_cmd[:, i])
+            u[:, i] = np.interp(k_ctrl, k_cmd, v_cmd[first, i])
         u[u < rc.deadband] = 0.0
         if rc.tau_motor > 0.0:
             h = dt / rc.tau_motor
@@ -93,7 +107,10 @@ class MotorChainModel:
             m = u
         self.m = m  # lagged voltage at every physics step, before the delay
         self.k_lc = np.arange(0, n_fine, rc.lc_decim)  # the load cells' sample steps
-        self.row_in_lc = np.searchsorted(self.k_lc, k_rows, side="right") - 1  # last sample at or before each row
+        # the sample each row's reading comes from: the last at or before its stamp (a log that stamps the
+        # readings with the row's time, not the sample's, gives the same)
+        self.row_in_lc = np.clip(np.floor((t_cells - self.t0) / (dt * rc.lc_decim) + 1e-6).astype(np.int64), 0,
+                                 self.k_lc.size - 1)
         self.k_rows = k_rows
 
     def voltages(self, delay: float, steps: np.ndarray) -> np.ndarray:
@@ -261,7 +278,7 @@ def fit_motor_chain(log, rc: RigConstants, rows: np.ndarray | None = None, fixed
     """Fit the chain to ``log`` (a :class:`~gcs_tools.identify.sysid_log.SysidLog`); ``rows``: a boolean
     mask of the rows whose residuals count (default all); ``fixed``: {index in NAMES: value} held, not
     fitted (their variance is 0)."""
-    model = MotorChainModel(log.t, log.v_cmd, rc)
+    model = MotorChainModel(log.t, log.v_cmd, rc, log.t_cmd, log.t_cells)
     use = log.t >= log.t[0] + SKIP_S
     if rows is not None:
         use &= rows

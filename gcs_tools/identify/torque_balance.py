@@ -35,7 +35,7 @@ from scipy.signal import lfilter
 
 from gcs_tools.identify.attitude_smoother import smoothed_attitude
 from gcs_tools.identify.hac import bandwidth, hac_covariance, long_run_covariance
-from gcs_tools.identify.motor_chain import cell_noise_var
+from gcs_tools.identify.motor_chain import cell_noise_var, grid_origin
 from gcs_tools.identify.rig_constants import RigConstants
 
 NAMES = ("ixx", "iyy", "izz", "viscous[0]", "viscous[1]", "viscous[2]", "coulomb[0]", "coulomb[1]", "coulomb[2]",
@@ -126,8 +126,9 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     ``fixed``: {index in NAMES: value} held at that value, not estimated (variance 0)."""
     t = log.t
     dt_lc = rc.dt * rc.lc_decim
-    t_lc = np.arange(t[0], t[-1] + 1e-9, dt_lc)
-    idx = np.clip(np.searchsorted(t_lc, t - 1e-9), 0, t_lc.size - 1)  # the load-cell sample of each row
+    t0 = grid_origin(rc, t, log.t_cmd, log.t_cells)
+    t_lc = t0 + dt_lc * np.arange(int(np.floor((t[-1] - t0) / dt_lc + 1e-9)) + 1)
+    idx = np.clip(np.floor((log.t_cells - t0) / dt_lc + 1e-6).astype(np.int64), 0, t_lc.size - 1)  # each row's sample
     w = np.column_stack([np.interp(t_lc, t, log.omega[:, i]) for i in range(3)])
     euler = smoothed_attitude(t, log.euler, log.omega)
     phi = np.interp(t_lc, t, euler[:, 0])
@@ -135,7 +136,9 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     gB = rc.g * np.column_stack([np.sin(theta), np.cos(theta) * np.sin(phi), np.cos(theta) * np.cos(phi)])
     a = rc.lc_alpha
     Hw = _iir(w, a)
-    dHw = np.vstack([np.zeros((1, 3)), np.diff(Hw, axis=0) / dt_lc])
+    # the angular acceleration at each sample: the central difference, in step with the torque of that sample
+    # (a one-sided one lags or leads it by half a sample, 2.5 ms, which reads as friction)
+    dHw = np.gradient(Hw, dt_lc, axis=0)
     Htanh = _iir(np.tanh(w / rc.coulomb_smoothing), a)
     HgB = _iir(gB, a)
     Hwyz = _iir(w[:, 1] * w[:, 2], a)
@@ -218,6 +221,8 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
         var_s2 = long_run_covariance(u[:, None], lag_z)[0, 0] / (kappa * L2.sum()) ** 2
         half = 1.96 * np.sqrt(var_s2)
         sig[ax] = np.sqrt(max(s2, 0.0))
-        ci[ax] = np.sqrt(max(s2 - half, 0.0)), np.sqrt(max(s2 + half, 0.0))
+        # where the residual leaves less than the load cells' own noise (a quiet axis), the estimate is 0
+        # and the interval reaches up to the estimate's own resolution, not to 0
+        ci[ax] = np.sqrt(max(s2 - half, 0.0)), np.sqrt(max(s2 + half, half))
     return TorqueFit(values=beta, cov=cov, residuals=res, used=used, lags=lags, noise_sigma=sig, noise_interval=ci,
                      load=load, lc_var=lc_var, X=X, Y=Y, free=free, axis_weight=1.0 / scale, kappa=kappa)

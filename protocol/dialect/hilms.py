@@ -18177,7 +18177,7 @@ class MAVLink(object):
         C (S - b), and the IIR-filtered thrust the rig uses (RIG-SPEC
         Sec. 4, paper Sec. 3-2, Eq. 40). Index 0..3 is arm 1..4.
 
-        time_usec                 : Simulated time since the emulator started. [us] (type:uint64_t)
+        time_usec                 : Simulated time since the emulator started at which the readings were taken (their load-cell sample). [us] (type:uint64_t)
         raw_counts                : Raw 10-bit ADC reading per arm (counts). (type:uint16_t)
         force_grf                 : Calibrated force per arm, gram-force. [gf] (type:float)
         thrust_n                  : Filtered thrust per arm (after the jump and 850 gf guards and the IIR filter). [N] (type:float)
@@ -18192,7 +18192,7 @@ class MAVLink(object):
         C (S - b), and the IIR-filtered thrust the rig uses (RIG-SPEC
         Sec. 4, paper Sec. 3-2, Eq. 40). Index 0..3 is arm 1..4.
 
-        time_usec                 : Simulated time since the emulator started. [us] (type:uint64_t)
+        time_usec                 : Simulated time since the emulator started at which the readings were taken (their load-cell sample). [us] (type:uint64_t)
         raw_counts                : Raw 10-bit ADC reading per arm (counts). (type:uint16_t)
         force_grf                 : Calibrated force per arm, gram-force. [gf] (type:float)
         thrust_n                  : Filtered thrust per arm (after the jump and 850 gf guards and the IIR filter). [N] (type:float)

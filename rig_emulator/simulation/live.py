@@ -32,7 +32,7 @@ from rig_emulator.simulation.params import control_params, disturbances, guidanc
 from rig_emulator.simulation.entry_points import BoundEntry
 from rig_emulator.simulation.faults import FaultEvent, FaultStatus, fault_status_inputs, fault_status_of
 from rig_emulator.simulation import log_layout as L
-from rig_emulator.simulation.run import Simulation
+from rig_emulator.simulation.run import Simulation, step_time_us
 
 # keys that fix array sizes or rates of a running rig
 _RESTART_ONLY = ("sim.physics_rate_hz", "sim.control_rate_hz", "sim.log_rate_hz", "sim.seed", "controller.plugin",
@@ -126,11 +126,26 @@ class RigSnapshot:
     #: simulated time in whole microseconds from the step counter; message time stamps use it
     #: (None: derive it from ``time_s``, rounded to the microsecond)
     time_us: int | None = None
+    #: when the values were taken that are older than the snapshot: the control update whose motor
+    #: commands ``voltage_commands`` are, and the load-cell sample ``thrusts`` and the sensor readings'
+    #: cells come from (whole microseconds; None: the snapshot's own time)
+    commands_time_us: int | None = None
+    cells_time_us: int | None = None
 
     @property
     def stamp_us(self) -> int:
         """Simulated time in whole microseconds for message time stamps."""
         return self.time_us if self.time_us is not None else int(round(self.time_s * 1e6))
+
+    @property
+    def commands_stamp_us(self) -> int:
+        """The stamp of the motor commands (SERVO_OUTPUT_RAW): the control update that computed them."""
+        return self.commands_time_us if self.commands_time_us is not None else self.stamp_us
+
+    @property
+    def cells_stamp_us(self) -> int:
+        """The stamp of the load-cell readings (HILMS_LOAD_CELLS): the sample they come from."""
+        return self.cells_time_us if self.cells_time_us is not None else self.stamp_us
 
     @property
     def rotation(self) -> np.ndarray:
@@ -372,9 +387,19 @@ class LiveRig:
                            st.cell_fault_mode.tolist())
         snap = object.__new__(_LiveSnapshot)
         nan3 = (math.nan,) * 3
+        # the last control update and load-cell sample among the steps run (a step senses, controls,
+        # then moves the physics: the snapshot after step k - 1 carries what those steps took)
+        last = max(sim.k - 1, 0)
+        rate = sim.cfg["sim.physics_rate_hz"]
+        cells_us = None
+        if sp.simulate:
+            decim = sp.suite.cells.decim
+            cells_us = step_time_us(last // decim * decim, rate)
         snap.__dict__.update(
             time_s=float(sim.time),
             time_us=sim.time_us,
+            commands_time_us=step_time_us(last // sim.ctrl_div * sim.ctrl_div, rate),
+            cells_time_us=cells_us,
             armed=sim.armed,
             position=tuple(t[0:3]),
             velocity=tuple(t[3:6]),

@@ -78,7 +78,7 @@ def _load_health(snap, readings) -> int:
 def hilms_load_cells(snap, ctx):
     r = ctx.readings(snap)
     return mavlink.MAVLink_hilms_load_cells_message(
-        time_usec=U.time_usec(snap.stamp_us), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts.tolist()],
+        time_usec=U.time_usec(snap.cells_stamp_us), raw_counts=[U.raw_count_u16(c) for c in r.load_raw_counts.tolist()],
         force_grf=r.load_force_grf.tolist(), thrust_n=r.load_thrust_n.tolist(),
         health=_load_health(snap, r))
 
@@ -86,6 +86,6 @@ def hilms_load_cells(snap, ctx):
 def named_value_float(snap, ctx):
     """HILMS_LOAD_CELLS for stock ground stations: filtered thrust per arm (N) as LC1_N..LC4_N."""
     r = ctx.readings(snap)
-    t = U.time_boot_ms(snap.stamp_us)
+    t = U.time_boot_ms(snap.cells_stamp_us)
     return [mavlink.MAVLink_named_value_float_message(time_boot_ms=t, name=name.encode("ascii"), value=float(f))
             for name, f in zip(LOAD_CELL_NAMES, r.load_thrust_n.tolist())]

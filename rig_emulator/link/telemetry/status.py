@@ -146,7 +146,7 @@ SERVO_FIELDS = tuple(f"servo{i + 1}_raw" for i in range(16))
 def servo_output_raw(snap, ctx):
     v_max = ctx.cfg["motors.voltage_max"]
     pwm = [U.pwm_us(v, v_max) for v in snap.voltage_commands] + [0] * 12
-    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.stamp_us), port=0,
+    return M.MAVLink_servo_output_raw_message(time_usec=U.time_usec_u32(snap.commands_stamp_us), port=0,
                                               **dict(zip(SERVO_FIELDS, pwm)))
 
 

@@ -14,7 +14,8 @@ ends after its last complete record.
 into the messages the live rig streams, built by the link's own message builders
 (``telemetry_*.py``) from a :class:`~rig_emulator.simulation.live.RigSnapshot` per log row,
 stamped with the simulated time (``time_boot_ms`` / ``time_usec`` and the record
-timestamp = ``epoch_s`` + simulated time), every message at the log rate
+timestamp = ``epoch_s`` + simulated time; SERVO_OUTPUT_RAW and the load cells' messages with the control
+update and the load-cell sample their values come from, as the live rig stamps them), every message at the log rate
 (``sim.log_rate_hz``; above 100 Hz only ATTITUDE, SERVO_OUTPUT_RAW and HILMS_LOAD_CELLS, the others at
 100 Hz) and HEARTBEAT / HOME_POSITION once per simulated second.
 
@@ -53,6 +54,7 @@ from rig_emulator.link.telemetry.ideal_sensors import load_sensor_model
 from rig_emulator.link.commands.modes import OFFBOARD, FlightModes
 from rig_emulator.link.telemetry.context import TelemetryContext
 from rig_emulator.physics.rotation import quat_from_euler
+from rig_emulator.sensors.load_cell import load_load_cell_config
 from rig_emulator.simulation.live import RigSnapshot
 from rig_emulator.simulation.run import step_time_us
 
@@ -139,20 +141,29 @@ def _t(v) -> tuple:
     return tuple(float(a) for a in np.atleast_1d(v))
 
 
-def row_snapshot(series: dict, i: int, guidance: str, physics_rate_hz: float | None = None) -> RigSnapshot:
+def row_snapshot(series: dict, i: int, guidance: str, physics_rate_hz: float | None = None,
+                 ctrl_div: int = 1, cells_div: int = 1) -> RigSnapshot:
     """The snapshot of log row ``i``: the rig's estimates as it reports them, the truth in ``true_*``.
 
     With ``physics_rate_hz`` its stamp (``time_us``) comes from the step counter of the row
-    (``t`` is k dt: k = round(t x rate)), as the live rig's does."""
+    (``t`` is k dt: k = round(t x rate)), as the live rig's does, and so do the stamps of the motor
+    commands and the load-cell readings the row carries: the row is written after step k's sensing
+    and control, so they are the last control update (every ``ctrl_div`` steps) and the last load-cell
+    sample (every ``cells_div`` steps) at or before k."""
     s = series
     t = float(s["t"][i])
-    time_us = None if physics_rate_hz is None else step_time_us(round(t * physics_rate_hz), physics_rate_hz)
+    time_us = commands_us = cells_us = None
+    if physics_rate_hz is not None:
+        k = round(t * physics_rate_hz)
+        time_us = step_time_us(k, physics_rate_hz)
+        commands_us = step_time_us(k // ctrl_div * ctrl_div, physics_rate_hz)
+        cells_us = step_time_us(k // cells_div * cells_div, physics_rate_hz)
     euler = s["euler"][i]
     nan3 = (math.nan,) * 3
     pos_des = s["pos_des"][i]
     attitude_mode = s["mode"][i] == 1.0 or not np.all(np.isfinite(pos_des))
     return RigSnapshot(
-        time_s=t, time_us=time_us, armed=True, position=_t(s["pos"][i]), velocity=_t(s["vel"][i]),
+        time_s=t, time_us=time_us, commands_time_us=commands_us, cells_time_us=cells_us, armed=True, position=_t(s["pos"][i]), velocity=_t(s["vel"][i]),
         quaternion=_quat_of(euler), euler=_t(euler), euler_rates=_t(s["euler_rate"][i]), body_rates=_t(s["omega"][i]),
         position_target=nan3 if attitude_mode else _t(pos_des),
         velocity_target=nan3 if attitude_mode else _t(s["vel_des"][i]),
@@ -206,8 +217,10 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1, label: str 
     guidance = cfg["guidance.type"]
     next_second = -math.inf
     other_div = max(1, int(round(float(cfg["sim.log_rate_hz"]) / OTHER_STREAMS_MAX_HZ)))
+    ctrl_div = int(round(cfg["sim.physics_rate_hz"] / cfg["sim.control_rate_hz"]))
+    cells_div = int(load_load_cell_config(cfg["sensor_models.zemic_l6d"] or None)["load_cell"]["decimation"])
     for k in range(n):
-        snap = row_snapshot(series, k, guidance, cfg["sim.physics_rate_hz"])
+        snap = row_snapshot(series, k, guidance, cfg["sim.physics_rate_hz"], ctrl_div, cells_div)
         t = snap.time_s
         if k == 0:
             for msg in label_messages(label) + mission_messages(cfg, sysid):
