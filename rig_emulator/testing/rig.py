@@ -455,3 +455,17 @@ class MissionClient:
                 low += 1
         self.conn.mav.mission_ack_send(ts, tc, 0, mission_type)
         return [got[s] for s in range(count)]
+
+
+class NullEndpoint:
+    """An endpoint that takes every frame and sends nothing: drives a :class:`~rig_emulator.link.server.RigServer`
+    channel chunk by chunk in a test, without a socket."""
+
+    kind = "udpin"
+    datagram = True
+
+    def send(self, key, data) -> bool:
+        return True
+
+    def flush(self) -> None:
+        pass

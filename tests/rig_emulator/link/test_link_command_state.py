@@ -10,23 +10,13 @@ from rig_emulator.link.serve import prepare_rig
 from rig_emulator.link.server import RigServer
 from rig_emulator.link.telemetry.stream_table import default_rates
 from rig_emulator.link.telemetry.streams import StreamSchedule
-
-
-class _Endpoint:
-    kind = "udpin"
-    datagram = True
-
-    def send(self, key, data) -> bool:
-        return True
-
-    def flush(self) -> None:
-        pass
+from rig_emulator.testing.rig import NullEndpoint
 
 
 def test_a_command_right_after_arming_sees_the_rig_armed():
     server = RigServer(prepare_rig(load_config()), [], speedup=1.0)
     try:
-        channel = Channel(_Endpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
+        channel = Channel(NullEndpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
                           StreamSchedule(default_rates(), server.chunk_s))
         sent = []
         channel.send = sent.append

@@ -26,8 +26,8 @@ from rig_emulator.link.serve import prepare_rig
 from rig_emulator.link.server import RigServer
 from rig_emulator.link.telemetry.stream_table import default_rates
 from rig_emulator.link.telemetry.streams import StreamSchedule
-from rig_emulator.testing.rig import (NAN, MissionClient, RigProcess, command, connect, recv, recv_text,
-                                      stamp_s)
+from rig_emulator.testing.rig import (NAN, MissionClient, NullEndpoint, RigProcess, command, connect, recv,
+                                      recv_text, stamp_s)
 
 ACCEPTED, DENIED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED
 SYSID_MODE = MD.custom_mode(MD.AUTO, MD.AUTO_SYSID)
@@ -238,23 +238,12 @@ def test_the_mission_reaches_the_item_and_flies_the_programme(rig, client):
     assert paused.seq == 1
 
 
-class _Endpoint:
-    kind = "udpin"
-    datagram = True
-
-    def send(self, key, data) -> bool:
-        return True
-
-    def flush(self) -> None:
-        pass
-
-
 def test_commands_that_need_the_rig_still_are_refused_during_a_disarmed_swing():
     """Chunk by chunk (the messages handled as a socket delivers them): in the roll swing the rig is disarmed,
     yet a reboot, a motor test or a calibration is refused while the programme runs; a disarm command stops it."""
     server = RigServer(prepare_rig(load_config()), [], speedup=1.0)
     try:
-        channel = Channel(_Endpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
+        channel = Channel(NullEndpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
                           StreamSchedule(default_rates(), server.chunk_s))
         sent = []
         channel.send = sent.append
