@@ -1,10 +1,12 @@
 """A cascaded PID in plain Python, as a user writes one: position PID -> tilt -> attitude PID.
 
 Both loops, u1 and body torques out (the rig's allocation does the rest). It reads what the
-onboard computer has (``obs``) and its gains (``self.params``); no numba. It takes the numbers
-it works with as Python floats (``.tolist()`` of the read-only numpy views, once a call):
-arithmetic on floats is about three times cheaper than on the numpy scalars that indexing a
-view gives (docs/explanation/controller-speed.md). The built-in ``pid`` strategy (and its
+onboard computer has (``obs``) and its gains (``self.params``); no numba. It is written as fast
+Python is written (docs/explanation/controller-speed.md): the numbers it works with are taken
+as Python floats once a call (``.tolist()`` of the read-only numpy views; arithmetic on floats
+is about three times cheaper than on the numpy scalars that indexing a view gives), the
+integrators are clamped with comparisons rather than ``min(max(...))`` calls, and ``math``'s
+functions are module names. The built-in ``pid`` strategy (and its
 compiled twin, :mod:`.pid`) also shapes the attitude target with a reference filter; this one
 does not. ``rig-emulator simulate --scenario helix --controller
 rig_emulator.controllers.examples.cascaded_pid:CascadedPID``; its speed is the
@@ -14,6 +16,8 @@ rig_emulator.controllers.examples.cascaded_pid:CascadedPID``; its speed is the
 import math
 
 from rig_emulator.controllers import Command, Controller
+
+sin, cos, asin, pi = math.sin, math.cos, math.asin, math.pi
 
 
 class CascadedPID(Controller):
@@ -30,25 +34,25 @@ class CascadedPID(Controller):
     def update(self, t, obs):
         p, dt, ref, lim, m = self.params, obs.dt, obs.reference, self.params.i_limit, obs.mass
         r, v, a = ref.position.tolist(), ref.velocity.tolist(), ref.acceleration.tolist()
-        pos, vel = obs.position.tolist(), obs.velocity.tolist()
-        kp, ki, kd = p.pos_kp.tolist(), p.pos_ki.tolist(), p.pos_kd.tolist()
-        acc = [0.0, 0.0, 0.0]
-        for i in range(3):  # position PID: the acceleration asked of each world axis
+        pos, vel, integral = obs.position.tolist(), obs.velocity.tolist(), self.pos_int
+        kp, ki, kd, acc = p.pos_kp.tolist(), p.pos_ki.tolist(), p.pos_kd.tolist(), [0.0, 0.0, 0.0]
+        for i in (0, 1, 2):  # position PID: the acceleration asked of each world axis
             e = r[i] - pos[i]
-            self.pos_int[i] = min(max(self.pos_int[i] + e * dt, -lim), lim)
-            acc[i] = a[i] + kp[i] * e + ki[i] * self.pos_int[i] + kd[i] * (v[i] - vel[i])
-        euler, rates, inertia = obs.euler.tolist(), obs.euler_rates.tolist(), obs.inertia.tolist()
-        phi, theta, psi_d, s = euler[0], euler[1], ref.yaw, math.sin(obs.max_tilt)
-        u1 = m * (obs.gravity + acc[2]) / max(math.cos(phi) * math.cos(theta), math.cos(obs.max_tilt))
+            s = integral[i] + e * dt
+            integral[i] = s if -lim < s < lim else (lim if s > 0.0 else -lim)
+            acc[i] = a[i] + kp[i] * e + ki[i] * integral[i] + kd[i] * (v[i] - vel[i])
+        phi, theta, psi = obs.euler.tolist()
+        psi_d, s = ref.yaw, sin(obs.max_tilt)
+        u1 = m * (obs.gravity + acc[2]) / max(cos(phi) * cos(theta), cos(obs.max_tilt))
         ux, uy = m * acc[0] / u1, m * acc[1] / u1  # Eq. 34-35: the tilt of the thrust
-        phi_d = math.asin(min(max(ux * math.sin(psi_d) - uy * math.cos(psi_d), -s), s))
-        theta_d = math.asin(min(max((ux * math.cos(psi_d) + uy * math.sin(psi_d)) / math.cos(phi_d), -s), s))
-        target, tau = (phi_d, theta_d, psi_d), [0.0, 0.0, 0.0]
-        kp, ki, kd = p.att_kp.tolist(), p.att_ki.tolist(), p.att_kd.tolist()
-        for i in range(3):  # attitude PID: Euler-frame torques
-            e = target[i] - euler[i]
-            if i == 2:
-                e = (e + math.pi) % (2.0 * math.pi) - math.pi  # yaw: the shorter way round
-            self.att_int[i] = min(max(self.att_int[i] + e * dt, -lim), lim)
-            tau[i] = inertia[i] * (kp[i] * e + ki[i] * self.att_int[i] - kd[i] * rates[i])
-        return Command((u1, tau[0], -tau[1], -tau[2]), target)  # Euler frame -> body FRD
+        phi_d = asin(min(max(ux * sin(psi_d) - uy * cos(psi_d), -s), s))
+        theta_d = asin(min(max((ux * cos(psi_d) + uy * sin(psi_d)) / cos(phi_d), -s), s))
+        err = (phi_d - phi, theta_d - theta, (psi_d - psi + pi) % (2.0 * pi) - pi)  # yaw: the shorter way
+        kp, ki, kd, integral = p.att_kp.tolist(), p.att_ki.tolist(), p.att_kd.tolist(), self.att_int
+        rates, inertia, tau = obs.euler_rates.tolist(), obs.inertia.tolist(), [0.0, 0.0, 0.0]
+        for i in (0, 1, 2):  # attitude PID: Euler-frame torques
+            e = err[i]
+            s = integral[i] + e * dt
+            integral[i] = s if -lim < s < lim else (lim if s > 0.0 else -lim)
+            tau[i] = inertia[i] * (kp[i] * e + ki[i] * integral[i] - kd[i] * rates[i])
+        return Command((u1, tau[0], -tau[1], -tau[2]), (phi_d, theta_d, psi_d))  # Euler frame -> body FRD
