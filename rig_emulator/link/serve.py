@@ -179,10 +179,13 @@ def _serve(args, overrides: dict, state, signing) -> int:
     runner = server
     try:  # a flight stack steps the plant (px4_simulator/, ardupilot_json/)
         if getattr(args, "px4_simulator", None):
-            from rig_emulator.link.px4_simulator.serve_px4 import serve_px4
+            from rig_emulator.link.px4_simulator.serve_px4 import AIRFRAME_FILE, serve_px4
 
             runner = serve_px4(args, server, rig, _log)
             print(f"rig-emulator: px4 simulator on {runner.transport.url}", flush=True)
+            print(f"rig-emulator: PX4 SITL airframe for the rig: {AIRFRAME_FILE} (copy it into PX4's "
+                  "build/px4_sitl_default/etc/init.d-posix/airframes/, start PX4 with PX4_SIM_MODEL=none_hilms)",
+                  flush=True)
         elif getattr(args, "ardupilot_json", None) is not None:
             from rig_emulator.link.ardupilot_json.serve_ardupilot import PARAM_FILE, serve_ardupilot
 

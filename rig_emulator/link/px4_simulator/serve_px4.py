@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 from rig_emulator.config.loader import ConfigError
 from rig_emulator.link.px4_simulator.transport import DEFAULT_HOST, DEFAULT_PORT, TransportError, open_transport, parse_spec
 
 DEFAULT_RATE_HZ = 250.0
+#: PX4 SITL's airframe for the rig (geometry and tuning, ``param set-default`` lines): copied into
+#: PX4's ``build/px4_sitl_default/etc/init.d-posix/airframes/``, PX4 starts it as ``PX4_SIM_MODEL=none_hilms``
+AIRFRAME_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "10090_none_hilms")
 
 
 def add_px4_args(p: argparse.ArgumentParser) -> None:
@@ -17,7 +21,9 @@ def add_px4_args(p: argparse.ArgumentParser) -> None:
                         f"{DEFAULT_HOST}:{DEFAULT_PORT}, where PX4 SITL connects) or use serial:DEVICE[:BAUD] for a "
                         "flight controller board in HIL; HIL_SENSOR/HIL_GPS/HIL_STATE_QUATERNION out, "
                         "HIL_ACTUATOR_CONTROLS in, one plant step per actuator message. The rig's own controllers "
-                        "are off; --mavlink endpoints keep serving the rig's telemetry")
+                        "are off; --mavlink endpoints keep serving the rig's telemetry. PX4 SITL needs the rig's geometry "
+                        "and tuning: the airframe installed with the rig as "
+                        "rig_emulator/link/px4_simulator/10090_none_hilms (the rig prints its path at start-up)")
     g.add_argument("--px4-rate", type=float, default=DEFAULT_RATE_HZ, metavar="HZ",
                    help="the flight stack's step rate, a divisor of the physics rate (default %(default)g, PX4's)")
     g.add_argument("--px4-all-fields", action="store_true",

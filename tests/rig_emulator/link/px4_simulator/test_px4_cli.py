@@ -3,6 +3,7 @@ and the options it refuses."""
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
@@ -10,6 +11,7 @@ import sys
 import pytest
 
 from gcs_tools.px4_peer import StreamLink, fly
+from rig_emulator.link.px4_simulator.serve_px4 import AIRFRAME_FILE
 from rig_emulator.testing.rig import START_TIMEOUT_S, RigProcess
 
 
@@ -18,6 +20,9 @@ def test_serve_px4_simulator_process():
         line = rig.wait_line("rig-emulator: px4 simulator on tcpin:127.0.0.1:")
         assert line is not None, rig.output
         port = int(line.rsplit(":", 1)[1])
+        airframe = rig.wait_line("rig-emulator: PX4 SITL airframe for the rig: ")
+        assert airframe is not None and AIRFRAME_FILE in airframe and "PX4_SIM_MODEL=none_hilms" in airframe
+        assert os.path.isfile(AIRFRAME_FILE)
         link = StreamLink.tcp("127.0.0.1", port, timeout_s=START_TIMEOUT_S)  # a cold cache compiles at connect
         log = fly(link, 1.0)
         link.close()
