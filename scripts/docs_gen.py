@@ -95,6 +95,14 @@ def _value(v) -> str:
     return repr(v).lower() if isinstance(v, bool) else repr(v)
 
 
+def _name(text: str) -> str:
+    """A key or MAVLink name as inline code that a narrow table column breaks only after a dot or an
+    underscore (the stylesheet stops breaks inside words)."""
+    import html
+
+    return "<code>" + html.escape(text).replace(".", ".<wbr>").replace("_", "_<wbr>") + "</code>"
+
+
 def parameters_page() -> str:
     from rig_emulator.config.loader import load_config
     from rig_emulator.config.schema import SCHEMA
@@ -111,9 +119,9 @@ def parameters_page() -> str:
         section = key.split(".")[0]
         mav = names.get(key, [])
         if len(mav) > 3:
-            mav_text = f"`{mav[0]}` .. `{mav[-1]}`"
+            mav_text = f"{_name(mav[0])} .. {_name(mav[-1])}"
         elif mav:
-            mav_text = ", ".join(f"`{n}`" for n in mav)
+            mav_text = ", ".join(_name(n) for n in mav)
         else:
             mav_text = "not served" if key in EXCLUDED else "-"
         default = _value(hw[key])
@@ -125,7 +133,7 @@ def parameters_page() -> str:
                 f"`{name}`{f' [{f.unit}]' if f.unit else ''}: {f.describe_values()}: {f.doc}"
                 for name, f in spec.item.items())
         sections.setdefault(section, []).append(
-            f"| `{key}` | {_cell(spec.unit) or '-'} | {_cell(spec.describe_values())} | {_cell(default_text)} "
+            f"| {_name(key)} | {_cell(spec.unit) or '-'} | {_cell(spec.describe_values())} | {_cell(default_text)} "
             f"| {mav_text} | {_cell(doc)} |")
     out = [
         "Generated from `rig_emulator/config/schema.py` (key, unit, allowed values, description), the "
