@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import textwrap
 import json
 import math
 import os
@@ -322,6 +323,64 @@ def reproduce_page(out_dir: Path, command: str, timing: Path | None) -> str:
             f" (`DIR/report.md`, its first table).{when}\n\n{body}\n")
 
 
+# --- your controllers next to the paper's (expensive: written from a `rig-gcs reproduce --controller` output) --
+
+def _section(report: str, title: str, path: Path) -> str:
+    for part in report.split("\n## ")[1:]:
+        if part.startswith(title):
+            return part.split("\n", 1)[1].strip()
+    raise SystemExit(f"docs_gen: {path} has no section {title!r} (run reproduce with --controller)")
+
+
+def _when(timing: Path | None, machine: str) -> str:
+    if timing is None:
+        return ""
+    t = json.loads(Path(timing).read_text())
+    parts = [f"{t['headless_runs']} headless runs" if "headless_runs" in t else "",
+             f"{t['simulated_s']:.0f} simulated s" if "simulated_s" in t else "",
+             f"{t['wall_s']:.0f} s wall" if "wall_s" in t else ""]
+    return " It took " + ", ".join(p for p in parts if p) + (f" on {machine}" if machine else "") + "."
+
+
+def compare_pages(out_dir: Path, command: str, timing: Path | None, machine: str) -> dict[str, str]:
+    """docs/generated/compare-verdicts.md (what the command prints and every plug-in's verdicts) and
+    compare-helix.md (the line-then-helix table) from ``DIR/report.md``."""
+    import re
+
+    path = Path(out_dir) / "report.md"
+    report = path.read_text()
+    verdicts = _section(report, "Verdicts", path)
+    summary = []
+    head = None
+    who = None
+    for line in verdicts.splitlines():
+        m = re.match(r"\*\*(.+) \(yours\)\*\* on `(.+?)`", line)
+        if m:
+            who, head = m.groups(), None
+        elif line.startswith("| metric |"):
+            head = [c.strip() for c in line.strip("|").split("|")][1:]
+        elif line.startswith("| better / same / worse |") and who and head:
+            for vs, cell in zip(head, [c.strip() for c in line.strip("|").split("|")][1:]):
+                b, same, w = (int(x) for x in cell.split("/"))
+                summary.append(f"{who[0]} (yours) on {who[1]} vs {vs[3:]}: better on {b}, same on {same}, "
+                               f"worse on {w} of {b + same + w} metrics")
+    if not summary:
+        raise SystemExit(f"docs_gen: no verdict counts in {path}")
+    intro = (f"Written by `python scripts/docs_gen.py --compare DIR` from the report of `{command}` (`DIR/report.md`)."
+             + _when(timing, machine))
+    helix = _section(report, "5. Line-then-helix", path)
+    table = "\n".join(ln if ln.startswith("|") else "\n" + ln + "\n" for ln in helix.splitlines()
+                      if ln.startswith(("|", "`"))).strip()
+    return {
+        "compare-verdicts.md": (f"{intro} It prints\n\n```text\n" + "\n".join(summary) + "\n```\n\n"
+                                "and writes every plug-in's verdicts to `DIR/report.md`:\n\n"
+                                "??? note \"Every plug-in's verdicts against each of the paper's controllers\"\n\n"
+                                + textwrap.indent(verdicts, "    ") + "\n"),
+        "compare-helix.md": (f"From the report of `{command}`, section \"Line-then-helix\" (mean over the "
+                             "seeds, the smallest and largest seed in brackets):\n\n" + table + "\n"),
+    }
+
+
 # --- the stability analysis (cheap, but its solver's last digits vary by machine: written, not checked) --
 
 def stability_page() -> str:
@@ -365,6 +424,12 @@ def main(argv=None) -> int:
                          "`rig-gcs identify --calibration-study N`")
     ap.add_argument("--identify-study-command", default="rig-gcs identify --calibration-study 20 --study-seed 1",
                     help="the command that made --identify-study's file, quoted on the page")
+    ap.add_argument("--compare", metavar="DIR",
+                    help="also write docs/generated/compare-verdicts.md and compare-helix.md from the output "
+                         "directory of `rig-gcs reproduce --controller ...`")
+    ap.add_argument("--compare-command", default="rig-gcs reproduce -o DIR --controller ...",
+                    help="the command that made --compare's directory, quoted on the page")
+    ap.add_argument("--compare-timing", metavar="FILE.json", help="its --timing file (runs and time on the page)")
     ap.add_argument("--stability", action="store_true",
                     help="also write docs/generated/stability.md (rig-gcs stability; needs the analysis extra)")
     args = ap.parse_args(argv)
@@ -380,6 +445,13 @@ def main(argv=None) -> int:
         timing = Path(args.reproduce_timing) if args.reproduce_timing else None
         path.write_text(reproduce_page(Path(args.reproduce), args.reproduce_command, timing))
         print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
+    if args.compare:
+        timing = Path(args.compare_timing) if args.compare_timing else None
+        for name, text in compare_pages(Path(args.compare), args.compare_command, timing, args.machine).items():
+            path = OUT / name
+            path.write_text(text)
+            print(f"docs_gen: wrote {path.relative_to(ROOT)}")
         return 0
     if args.identify_study:
         from gcs_tools.identify.study import markdown_page

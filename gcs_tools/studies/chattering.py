@@ -115,6 +115,12 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> None:
     args = parser().parse_args(argv)
+    out = Page(args.markdown, "The reproduction's `hover-shocks` job (Fig. 12), SMC and FLC, 20 s, 500 Hz log, "
+                              f"seeds 0-{args.seeds - 1}: chattering as `rig-gcs reproduce` measures it, RMS above "
+                              f"{exp_shocks.CUTOFF_HZ:g} Hz of the roll and pitch errors (deg; what Fig. 12 plots "
+                              "and the verdict reads) and of the four motor voltage commands (V), mean over the "
+                              "seeds; verdicts of the claim \"FLC eliminates the chattering\" per seed (y, p, n).",
+               workers=args.workers)
     seeds = range(args.seeds)
     columns = ("t", "euler", "euler_des", "v_cmd")
     runs = delay_plants() if args.delay_scan else plants()
@@ -123,12 +129,6 @@ def main(argv=None) -> None:
     results = run_jobs(jobs + spectra, workers=args.workers)
     figures = iter(exp_shocks.summarise(r) for r in results[:len(jobs)])
 
-    out = Page(args.markdown, "The reproduction's `hover-shocks` job (Fig. 12), SMC and FLC, 20 s, 500 Hz log, "
-                              f"seeds 0-{args.seeds - 1}: chattering as `rig-gcs reproduce` measures it, RMS above "
-                              f"{exp_shocks.CUTOFF_HZ:g} Hz of the roll and pitch errors (deg; what Fig. 12 plots "
-                              "and the verdict reads) and of the four motor voltage commands (V), mean over the "
-                              "seeds; verdicts of the claim \"FLC eliminates the chattering\" per seed (y, p, n).",
-               workers=args.workers)
     out.print(f"chattering in hover-shocks, mean over seeds 0-{args.seeds - 1}: RMS above {exp_shocks.CUTOFF_HZ:g} Hz of "
               "the roll and pitch errors (deg; what Fig. 12 plots and the verdict reads) and of the motor voltage "
               "commands (V)", md="")
@@ -148,7 +148,8 @@ def main(argv=None) -> None:
     if spectra:
         head = (f"hilms, FLC: share of the torque commands' power above {BANDS_HZ[0][0]:g} Hz per band, "
                 "mean over the seeds")
-        out.print("\n" + head, md="\n" + head[0].upper() + head[1:] + ":\n")
+        out.print("\n" + head, md=f"\nOn `hilms`, the FLC's torque commands: share of their power above "
+                                  f"{BANDS_HZ[0][0]:g} Hz per band, mean over the seeds:\n")
         out.print(f"{'axis':6s} " + " ".join(f"{lo:g}-{hi:g} Hz".rjust(11) for lo, hi in BANDS_HZ),
                   md="| axis | " + " | ".join(f"{lo:g}-{hi:g} Hz" for lo, hi in BANDS_HZ) + " |\n|---|"
                      + "---|" * len(BANDS_HZ))
