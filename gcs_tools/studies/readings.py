@@ -114,12 +114,12 @@ def main(argv=None) -> int:
     columns = []
     chosen = [r for r in READINGS if not args.only_reading or any(s in r[0] for s in args.only_reading)]
     for i, (label, over) in enumerate(chosen):
-        out = Path(args.output) / label.replace(", ", "_").replace(" ", "-")
-        earlier = _from_results(out / "results.json", over, args.seeds)
+        where = Path(args.output) / label.replace(", ", "_").replace(" ", "-")
+        earlier = _from_results(where / "results.json", over, args.seeds)
         if earlier is not None:  # resumed: this reading ran before with the same overrides
             columns.append(PlantRuns(label, args.plant, tuple(sorted(over.items())), earlier))
             continue
-        outcome = reproduce(out, seed=args.seed, workers=args.workers, only=names, show_progress=False,
+        outcome = reproduce(where, seed=args.seed, workers=args.workers, only=names, show_progress=False,
                             plants=(args.plant,), seeds=args.seeds, overrides=over, live=False)
         col = outcome.columns[0]
         columns.append(PlantRuns(label, col.airframe, col.overrides, col.sections))
