@@ -1,6 +1,5 @@
 """Where the FLC's chattering on ``hilms`` comes from (Fig. 12's "FLC eliminates the chattering SMC
-shows in hover with shocks"; docs/explanation/readings.md, "The chattering verdicts read the angles; the FLC's
-chattering on the hardware rig").
+shows in hover with shocks"; docs/explanation/readings.md, "The chattering claims").
 
     python -m gcs_tools.studies chattering [--seeds 3] [--workers 2]
     python -m gcs_tools.studies chattering --delay-scan [--seeds 3] [--workers 2]

@@ -1,6 +1,7 @@
 """The paper's 18 numbers (Table 4, Table 6, Fig. 19) on ``hilms`` over a scan of one setting, mean
-over seeds 0-2 (docs/explanation/readings.md, "The position FLC's rate share", "Table 6's yaw" and "The
-actuation delay").
+over seeds 0-2 (docs/explanation/readings.md, "The position FLC's rate input", "The heading and the
+motors' magnetic field" and "The delay and the joint's friction"; the ``point`` study in
+docs/explanation/paper-fit.md).
 
     python -m gcs_tools.studies paper-numbers rate-share [--values 0.2,0.25,...] [--workers N]
     python -m gcs_tools.studies paper-numbers yaw [--values 0.005,0.03,0.06] [--set KEY=VALUE ...]

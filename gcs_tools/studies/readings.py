@@ -9,7 +9,7 @@ counted. Prints the markdown table (and writes it with ``--markdown FILE``)::
     python -m gcs_tools.studies readings -o /tmp/readings            # seed 0, all readings
     python -m gcs_tools.studies readings -o /tmp/readings --seeds 3 --plant hilms-ideal
 
-Readings (docs/explanation/readings.md, "Readings of Eq. 41 and of the motor ceiling"):
+Readings (docs/explanation/readings.md, "Eq. 41's gains and the 850 gr.F ceiling"):
 
 * K: ``si`` rad/s^2 (as printed), ``thrust`` a thrust difference in N (switching torque K l),
   ``torque`` a torque in N m;

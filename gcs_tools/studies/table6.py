@@ -1,6 +1,7 @@
-"""Why Table 6's FLC altitude error is 2.4x the SMC-FLC's on the hardware rig, where the paper's are
-equal (0.2279 / 0.2263 m), and the rectangle's ME Y (docs/explanation/readings.md, "Table 6's altitude:
-the jump at t = 12 s through the mixer").
+"""Table 6's altitude errors on the hardware rig through the mixer: under the roll/pitch-first mixer
+(``control.allocation_priority = "attitude"``) the FLC's is metres where the paper's two are equal
+(0.2279 / 0.2263 m); and the rectangle's ME Y (docs/explanation/readings.md, "The mixer when the
+motors saturate"; the ``bias`` scan in docs/explanation/paper-fit.md).
 
     python -m gcs_tools.studies table6 candidates --priority attitude [--workers N]   # each candidate switched off
     python -m gcs_tools.studies table6 candidates --priority thrust [--workers N]     # the same, the shipped mixer
