@@ -17,6 +17,7 @@ Usage (scripts/docs.sh runs it)::
 from __future__ import annotations
 
 import argparse
+import importlib
 import io
 import textwrap
 import json
@@ -67,7 +68,19 @@ def cli_pages() -> dict[str, str]:
     from gcs_tools.cli import build_parser as gcs_parser
     from rig_emulator.cli import build_parser as rig_parser
 
+    from gcs_tools.studies import STUDIES
+
+    studies = ["Generated from `gcs_tools/studies/` (`python -m gcs_tools.studies`, `python -m gcs_tools.studies "
+               "NAME --help`). Each study prints its tables; `--markdown FILE` also writes them as a page with the "
+               "command, its wall time and the machine (the documentation includes those pages from "
+               "`docs/generated/study-*.md`).", "", "| study | what it measures |", "| --- | --- |"]
+    studies += [f"| `{name}` | {_cell(what)} |" for name, (_, what) in STUDIES.items()]
+    studies.append("")
+    for name, (module, _) in STUDIES.items():
+        parser = importlib.import_module(f"gcs_tools.studies.{module}").parser()
+        studies += [f"### `{parser.prog}`", "", "```text", parser.format_help().rstrip(), "```", ""]
     return {
+        "cli-studies.md": "\n".join(studies).rstrip() + "\n",
         "cli-rig-emulator.md": _cli_page(
             rig_parser(), "Generated from `rig_emulator/cli.py`'s parser (`rig-emulator --help`, "
                           "`rig-emulator COMMAND --help`). `rig-emulator` with no command is `rig-emulator serve`."),
