@@ -128,8 +128,8 @@ def main(argv=None) -> None:
     results = run_jobs(jobs + spectra, workers=args.workers)
     figures = iter(exp_shocks.summarise(r) for r in results[:len(jobs)])
 
-    out.print(f"chattering in hover-shocks, mean over seeds 0-{args.seeds - 1}: RMS above {exp_shocks.CUTOFF_HZ:g} Hz of "
-              "the roll and pitch errors (deg; what Fig. 12 plots and the verdict reads) and of the motor voltage "
+    out.print(f"chattering in hover-shocks, mean over seeds 0-{args.seeds - 1}: RMS above "
+              f"{exp_shocks.CUTOFF_HZ:g} Hz of the roll and pitch errors (deg; what Fig. 12 plots and the verdict reads) and of the motor voltage "
               "commands (V)", md="")
     out.print(f"{'plant':58s} {'SMC deg':>8s} {'FLC deg':>8s} {'FLC/SMC':>8s}  verdicts  {'SMC V':>7s} {'FLC V':>7s} "
               f"{'FLC/SMC':>8s}", md="| plant | SMC (deg) | FLC (deg) | FLC / SMC | verdicts | SMC (V) | FLC (V) "

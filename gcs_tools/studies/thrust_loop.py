@@ -1,5 +1,6 @@
-"""The load-cell thrust loop's study (docs/explanation/readings.md, "The motor voltages: a load-cell thrust loop"): Fig. 17's
-altitude error early vs late per time constant and seed, and what a faulted load cell does to it.
+"""The load-cell thrust loop's study (docs/explanation/readings.md, "The motor voltages: a load-cell
+thrust loop"): Fig. 17's altitude error early vs late per time constant and seed, and what a
+faulted load cell does to it.
 
     python -m gcs_tools.studies thrust-loop altitude 0 5 20 60 100 200 500 1000
     python -m gcs_tools.studies thrust-loop faults

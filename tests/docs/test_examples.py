@@ -151,9 +151,9 @@ def test_example_runs(example: Example, tmp_path):
 # --- every command the pages quote exists ----------------------------------------------------------
 #
 # A page that quotes `python scripts/gone.py`, `python -m gcs_tools.studies gone`, `rig-gcs gone`, an
-# option a command no longer has or a file of the repository that is gone sends its reader to an error. The commands are read from the code
-# spans and code blocks of every page (the generated ones too) and checked against the files and the
-# argument parsers; nothing is run.
+# option a command no longer has or a file of the repository that is gone sends its reader to an
+# error. The commands are read from the code spans and code blocks of every page (the generated ones
+# too) and checked against the files and the argument parsers; nothing is run.
 
 #: a file of the repository named in the text (`scripts/docs_gen.py`, `docs/how-to/faults.md`, ...)
 REPO_FILE = re.compile(r"(?<![\w/.-])(?:scripts|docs|rig_emulator|gcs_tools|protocol|benchmarks|tests)/"
