@@ -394,6 +394,18 @@ def compare_pages(out_dir: Path, command: str, timing: Path | None, machine: str
     }
 
 
+# --- the paper fit's held-out tables (expensive: written from `rig-gcs identify --paper --held-out` files) --
+
+def held_out_page(path: Path, wall_s: float | None, machine: str) -> str:
+    """docs/generated/held-out-NAME.md from the ``-o FILE.json`` of ``rig-gcs identify --paper --held-out``."""
+    from gcs_tools.identify.held_out import markdown
+
+    doc = json.loads(Path(path).read_text())
+    took = "" if wall_s is None else f" It took {wall_s:.0f} s wall" + (f" on {machine}" if machine else "") + "."
+    return (f"Written by `python scripts/docs_gen.py --held-out FILE.json` from the `-o` file of the command below "
+            f"({doc['evaluated_points']} evaluated points).{took}\n\n" + markdown(doc, doc.get("command")) + "\n")
+
+
 # --- the stability analysis (cheap, but its solver's last digits vary by machine: written, not checked) --
 
 def stability_page() -> str:
@@ -443,6 +455,10 @@ def main(argv=None) -> int:
     ap.add_argument("--compare-command", default="rig-gcs reproduce -o DIR --controller ...",
                     help="the command that made --compare's directory, quoted on the page")
     ap.add_argument("--compare-timing", metavar="FILE.json", help="its --timing file (runs and time on the page)")
+    ap.add_argument("--held-out", metavar="FILE.json", help="also write docs/generated/held-out-NAME.md from the "
+                                                             "-o file of `rig-gcs identify --paper --held-out ...`")
+    ap.add_argument("--held-out-name", default="logo", help="NAME of --held-out's page: %(default)s")
+    ap.add_argument("--held-out-wall", type=float, metavar="S", help="the wall time --held-out's command took (s)")
     ap.add_argument("--stability", action="store_true",
                     help="also write docs/generated/stability.md (rig-gcs stability; needs the analysis extra)")
     args = ap.parse_args(argv)
@@ -457,6 +473,11 @@ def main(argv=None) -> int:
         path = OUT / "reproduce-summary.md"
         timing = Path(args.reproduce_timing) if args.reproduce_timing else None
         path.write_text(reproduce_page(Path(args.reproduce), args.reproduce_command, timing))
+        print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
+    if args.held_out:
+        path = OUT / f"held-out-{args.held_out_name}.md"
+        path.write_text(held_out_page(Path(args.held_out), args.held_out_wall, args.machine))
         print(f"docs_gen: wrote {path.relative_to(ROOT)}")
         return 0
     if args.compare:
