@@ -12,6 +12,11 @@ Usage (scripts/docs.sh runs it)::
 
     python scripts/docs_gen.py            # (re)write docs/generated/
     python scripts/docs_gen.py --check    # exit 1, naming the files, when a committed one differs
+
+The expensive pages are written from a run's output, each saying the command and the machine:
+``--benchmarks FILE.json``, ``--reproduce DIR``, ``--compare DIR`` (``rig-gcs reproduce --controller``),
+``--held-out FILE.json`` (``rig-gcs identify --paper --held-out``), ``--identify-study FILE.json``,
+``--stability``; the studies write theirs themselves (``python -m gcs_tools.studies NAME --markdown FILE``).
 """
 
 from __future__ import annotations
@@ -19,11 +24,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import io
-import textwrap
 import json
 import math
 import os
 import sys
+import textwrap
 import xml.etree.ElementTree as ET
 from contextlib import redirect_stdout
 from pathlib import Path
@@ -66,9 +71,8 @@ def _cli_page(parser: argparse.ArgumentParser, intro: str) -> str:
 def cli_pages() -> dict[str, str]:
     os.environ["COLUMNS"] = HELP_WIDTH
     from gcs_tools.cli import build_parser as gcs_parser
-    from rig_emulator.cli import build_parser as rig_parser
-
     from gcs_tools.studies import STUDIES
+    from rig_emulator.cli import build_parser as rig_parser
 
     studies = ["Generated from `gcs_tools/studies/` (`python -m gcs_tools.studies`, `python -m gcs_tools.studies "
                "NAME --help`). Each study prints its tables; `--markdown FILE` also writes them as a page with the "
