@@ -12,16 +12,23 @@ Usage (scripts/docs.sh runs it)::
 
     python scripts/docs_gen.py            # (re)write docs/generated/
     python scripts/docs_gen.py --check    # exit 1, naming the files, when a committed one differs
+
+The expensive pages are written from a run's output, each saying the command and the machine:
+``--benchmarks FILE.json``, ``--reproduce DIR``, ``--compare DIR`` (``rig-gcs reproduce --controller``),
+``--held-out FILE.json`` (``rig-gcs identify --paper --held-out``), ``--identify-study FILE.json``,
+``--stability``; the studies write theirs themselves (``python -m gcs_tools.studies NAME --markdown FILE``).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import io
 import json
 import math
 import os
 import sys
+import textwrap
 import xml.etree.ElementTree as ET
 from contextlib import redirect_stdout
 from pathlib import Path
@@ -64,9 +71,20 @@ def _cli_page(parser: argparse.ArgumentParser, intro: str) -> str:
 def cli_pages() -> dict[str, str]:
     os.environ["COLUMNS"] = HELP_WIDTH
     from gcs_tools.cli import build_parser as gcs_parser
+    from gcs_tools.studies import STUDIES
     from rig_emulator.cli import build_parser as rig_parser
 
+    studies = ["Generated from `gcs_tools/studies/` (`python -m gcs_tools.studies`, `python -m gcs_tools.studies "
+               "NAME --help`). Each study prints its tables; `--markdown FILE` also writes them as a page with the "
+               "command, its wall time and the machine (the documentation includes those pages from "
+               "`docs/generated/study-*.md`).", "", "| study | what it measures |", "| --- | --- |"]
+    studies += [f"| `{name}` | {_cell(what)} |" for name, (_, what) in STUDIES.items()]
+    studies.append("")
+    for name, (module, _) in STUDIES.items():
+        parser = importlib.import_module(f"gcs_tools.studies.{module}").parser()
+        studies += [f"### `{parser.prog}`", "", "```text", parser.format_help().rstrip(), "```", ""]
     return {
+        "cli-studies.md": "\n".join(studies).rstrip() + "\n",
         "cli-rig-emulator.md": _cli_page(
             rig_parser(), "Generated from `rig_emulator/cli.py`'s parser (`rig-emulator --help`, "
                           "`rig-emulator COMMAND --help`). `rig-emulator` with no command is `rig-emulator serve`."),
@@ -330,6 +348,76 @@ def reproduce_page(out_dir: Path, command: str, timing: Path | None) -> str:
             f" (`DIR/report.md`, its first table).{when}\n\n{body}\n")
 
 
+# --- your controllers next to the paper's (expensive: written from a `rig-gcs reproduce --controller` output) --
+
+def _section(report: str, title: str, path: Path) -> str:
+    for part in report.split("\n## ")[1:]:
+        if part.startswith(title):
+            return part.split("\n", 1)[1].strip()
+    raise SystemExit(f"docs_gen: {path} has no section {title!r} (run reproduce with --controller)")
+
+
+def _when(timing: Path | None, machine: str) -> str:
+    if timing is None:
+        return ""
+    t = json.loads(Path(timing).read_text())
+    parts = [f"{t['headless_runs']} headless runs" if "headless_runs" in t else "",
+             f"{t['simulated_s']:.0f} simulated s" if "simulated_s" in t else "",
+             f"{t['wall_s']:.0f} s wall" if "wall_s" in t else ""]
+    return " It took " + ", ".join(p for p in parts if p) + (f" on {machine}" if machine else "") + "."
+
+
+def compare_pages(out_dir: Path, command: str, timing: Path | None, machine: str) -> dict[str, str]:
+    """docs/generated/compare-verdicts.md (what the command prints and every plug-in's verdicts) and
+    compare-helix.md (the line-then-helix table) from ``DIR/report.md``."""
+    import re
+
+    path = Path(out_dir) / "report.md"
+    report = path.read_text()
+    verdicts = _section(report, "Verdicts", path)
+    summary = []
+    head = None
+    who = None
+    for line in verdicts.splitlines():
+        m = re.match(r"\*\*(.+) \(yours\)\*\* on `(.+?)`", line)
+        if m:
+            who, head = m.groups(), None
+        elif line.startswith("| metric |"):
+            head = [c.strip() for c in line.strip("|").split("|")][1:]
+        elif line.startswith("| better / same / worse |") and who and head:
+            for vs, cell in zip(head, [c.strip() for c in line.strip("|").split("|")][1:]):
+                b, same, w = (int(x) for x in cell.split("/"))
+                summary.append(f"{who[0]} (yours) on {who[1]} vs {vs[3:]}: better on {b}, same on {same}, "
+                               f"worse on {w} of {b + same + w} metrics")
+    if not summary:
+        raise SystemExit(f"docs_gen: no verdict counts in {path}")
+    intro = (f"Written by `python scripts/docs_gen.py --compare DIR` from the report of `{command}` (`DIR/report.md`)."
+             + _when(timing, machine))
+    helix = _section(report, "5. Line-then-helix", path)
+    table = "\n".join(ln if ln.startswith("|") else "\n" + ln + "\n" for ln in helix.splitlines()
+                      if ln.startswith(("|", "`"))).strip()
+    return {
+        "compare-verdicts.md": (f"{intro} It prints\n\n```text\n" + "\n".join(summary) + "\n```\n\n"
+                                "and writes every plug-in's verdicts to `DIR/report.md`:\n\n"
+                                "??? note \"Every plug-in's verdicts against each of the paper's controllers\"\n\n"
+                                + textwrap.indent(verdicts, "    ") + "\n"),
+        "compare-helix.md": (f"From the report of `{command}`, section \"Line-then-helix\" (mean over the "
+                             "seeds, the smallest and largest seed in brackets):\n\n" + table + "\n"),
+    }
+
+
+# --- the paper fit's held-out tables (expensive: written from `rig-gcs identify --paper --held-out` files) --
+
+def held_out_page(path: Path, wall_s: float | None, machine: str) -> str:
+    """docs/generated/held-out-NAME.md from the ``-o FILE.json`` of ``rig-gcs identify --paper --held-out``."""
+    from gcs_tools.identify.held_out import markdown
+
+    doc = json.loads(Path(path).read_text())
+    took = "" if wall_s is None else f" It took {wall_s:.0f} s wall" + (f" on {machine}" if machine else "") + "."
+    return (f"Written by `python scripts/docs_gen.py --held-out FILE.json` from the `-o` file of the command below "
+            f"({doc['evaluated_points']} evaluated points).{took}\n\n" + markdown(doc, doc.get("command")) + "\n")
+
+
 # --- the stability analysis (cheap, but its solver's last digits vary by machine: written, not checked) --
 
 def stability_page() -> str:
@@ -373,6 +461,16 @@ def main(argv=None) -> int:
                          "`rig-gcs identify --calibration-study N`")
     ap.add_argument("--identify-study-command", default="rig-gcs identify --calibration-study 20 --study-seed 1",
                     help="the command that made --identify-study's file, quoted on the page")
+    ap.add_argument("--compare", metavar="DIR",
+                    help="also write docs/generated/compare-verdicts.md and compare-helix.md from the output "
+                         "directory of `rig-gcs reproduce --controller ...`")
+    ap.add_argument("--compare-command", default="rig-gcs reproduce -o DIR --controller ...",
+                    help="the command that made --compare's directory, quoted on the page")
+    ap.add_argument("--compare-timing", metavar="FILE.json", help="its --timing file (runs and time on the page)")
+    ap.add_argument("--held-out", metavar="FILE.json", help="also write docs/generated/held-out-NAME.md from the "
+                                                             "-o file of `rig-gcs identify --paper --held-out ...`")
+    ap.add_argument("--held-out-name", default="logo", help="NAME of --held-out's page: %(default)s")
+    ap.add_argument("--held-out-wall", type=float, metavar="S", help="the wall time --held-out's command took (s)")
     ap.add_argument("--stability", action="store_true",
                     help="also write docs/generated/stability.md (rig-gcs stability; needs the analysis extra)")
     args = ap.parse_args(argv)
@@ -388,6 +486,18 @@ def main(argv=None) -> int:
         timing = Path(args.reproduce_timing) if args.reproduce_timing else None
         path.write_text(reproduce_page(Path(args.reproduce), args.reproduce_command, timing))
         print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
+    if args.held_out:
+        path = OUT / f"held-out-{args.held_out_name}.md"
+        path.write_text(held_out_page(Path(args.held_out), args.held_out_wall, args.machine))
+        print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
+    if args.compare:
+        timing = Path(args.compare_timing) if args.compare_timing else None
+        for name, text in compare_pages(Path(args.compare), args.compare_command, timing, args.machine).items():
+            path = OUT / name
+            path.write_text(text)
+            print(f"docs_gen: wrote {path.relative_to(ROOT)}")
         return 0
     if args.identify_study:
         from gcs_tools.identify.study import markdown_page

@@ -11,6 +11,7 @@ STUDIES = {
     "chattering": ("chattering", "where the FLC's chattering on the hardware rig comes from (Fig. 12)"),
     "table6": ("table6", "Table 6's altitude errors: Eq. 46's jump at t = 12 s through the mixer"),
     "thrust-loop": ("thrust_loop", "the load-cell thrust loop's time constant against Fig. 17, and faulted cells"),
-    "paper-numbers": ("paper_numbers", "the paper's 18 numbers over a scan of one setting (rate share, delay, yaw)"),
+    "paper-numbers": ("paper_numbers",
+                      "the paper's 18 numbers at one setting (point) or over a scan of one (rate share, delay, yaw)"),
     "faults": ("faults", "how the rig degrades under each fault: estimation error, tracking error, failsafe"),
 }

@@ -1,9 +1,9 @@
 """Where the FLC's chattering on ``hilms`` comes from (Fig. 12's "FLC eliminates the chattering SMC
-shows in hover with shocks"; docs/explanation/readings.md, "The chattering verdicts read the angles; the FLC's
-chattering on the hardware rig").
+shows in hover with shocks"; docs/explanation/readings.md, "The chattering claims").
 
     python -m gcs_tools.studies chattering [--seeds 3] [--workers 2]
     python -m gcs_tools.studies chattering --delay-scan [--seeds 3] [--workers 2]
+    python -m gcs_tools.studies chattering --markdown FILE     # also write the tables as a docs page
 
 Runs the reproduction's ``hover-shocks`` job (SMC and FLC, 20 s, 500 Hz log) on four kinds of plant:
 ``hilms-ideal``; ``hilms-ideal`` plus one effect (or reading) of ``hilms``; ``hilms`` minus one (that
@@ -29,6 +29,7 @@ import numpy as np
 
 from gcs_tools.reproduce import exp_shocks
 from gcs_tools.reproduce.experiment import status_letter
+from gcs_tools.studies.page import Page
 from rig_emulator.config.loader import load_config
 from rig_emulator.sweep import SimJob, run_jobs
 
@@ -101,12 +102,24 @@ def band_shares(t: np.ndarray, x: np.ndarray) -> list[float]:
     return [float(p[(f >= lo) & (f < hi)].sum() / total) for lo, hi in BANDS_HZ]
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies chattering", description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3, help="seeds 0 .. N-1 (default 3)")
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--delay-scan", action="store_true", help="the delay scan with and without the convex curve")
-    args = ap.parse_args()
+    ap.add_argument("--markdown", metavar="FILE",
+                    help="also write the tables (as markdown) to FILE, with the command and the machine")
+    return ap
+
+
+def main(argv=None) -> None:
+    args = parser().parse_args(argv)
+    out = Page(args.markdown, "The reproduction's `hover-shocks` job (Fig. 12), SMC and FLC, 20 s, 500 Hz log, "
+                              f"seeds 0-{args.seeds - 1}: chattering as `rig-gcs reproduce` measures it, RMS above "
+                              f"{exp_shocks.CUTOFF_HZ:g} Hz of the roll and pitch errors (deg; what Fig. 12 plots "
+                              "and the verdict reads) and of the four motor voltage commands (V), mean over the "
+                              "seeds; verdicts of the claim \"FLC eliminates the chattering\" per seed (y, p, n).",
+               workers=args.workers)
     seeds = range(args.seeds)
     columns = ("t", "euler", "euler_des", "v_cmd")
     runs = delay_plants() if args.delay_scan else plants()
@@ -115,28 +128,35 @@ def main() -> None:
     results = run_jobs(jobs + spectra, workers=args.workers)
     figures = iter(exp_shocks.summarise(r) for r in results[:len(jobs)])
 
-    print(f"chattering in hover-shocks, mean over seeds 0-{args.seeds - 1}: RMS above {exp_shocks.CUTOFF_HZ:g} Hz of "
-          "the roll and pitch errors (deg; what Fig. 12 plots and the verdict reads) and of the motor voltage "
-          "commands (V)")
-    print(f"{'plant':58s} {'SMC deg':>8s} {'FLC deg':>8s} {'FLC/SMC':>8s}  verdicts  {'SMC V':>7s} {'FLC V':>7s} "
-          f"{'FLC/SMC':>8s}")
+    out.print(f"chattering in hover-shocks, mean over seeds 0-{args.seeds - 1}: RMS above "
+              f"{exp_shocks.CUTOFF_HZ:g} Hz of the roll and pitch errors (deg; what Fig. 12 plots and the verdict reads) and of the motor voltage "
+              "commands (V)", md="")
+    out.print(f"{'plant':58s} {'SMC deg':>8s} {'FLC deg':>8s} {'FLC/SMC':>8s}  verdicts  {'SMC V':>7s} {'FLC V':>7s} "
+              f"{'FLC/SMC':>8s}", md="| plant | SMC (deg) | FLC (deg) | FLC / SMC | verdicts | SMC (V) | FLC (V) "
+                                     "| FLC / SMC |\n|---|---|---|---|---|---|---|---|")
     for label, _, _ in runs:
         per_seed = [(next(figures), next(figures)) for _ in seeds]
         smc_deg, flc_deg, smc_v, flc_v = np.mean(
             [[a["chattering_deg_rms"], b["chattering_deg_rms"], a["chattering_v_rms"], b["chattering_v_rms"]]
              for a, b in per_seed], axis=0).tolist()
         verdicts = "".join(status_letter(exp_shocks.chattering_verdict(a, b).status) for a, b in per_seed)
-        print(f"{label:58s} {smc_deg:8.4f} {flc_deg:8.4f} {flc_deg / smc_deg:8.2f}  [{verdicts}]    {smc_v:7.3f} "
-              f"{flc_v:7.3f} {flc_v / smc_v:8.2f}")
-    if not spectra:
-        return
-
-    print(f"\nhilms, FLC: share of the torque commands' power above {BANDS_HZ[0][0]:g} Hz per band, "
-          "mean over the seeds")
-    print(f"{'axis':6s} " + " ".join(f"{lo:g}-{hi:g} Hz".rjust(11) for lo, hi in BANDS_HZ))
-    for k, axis in ((1, "roll"), (2, "pitch"), (3, "yaw")):
-        shares = np.mean([band_shares(r.series["t"], r.series["u"][:, k]) for r in results[len(jobs):]], axis=0)
-        print(f"{axis:6s} " + " ".join(f"{s:11.2f}" for s in shares))
+        out.print(f"{label:58s} {smc_deg:8.4f} {flc_deg:8.4f} {flc_deg / smc_deg:8.2f}  [{verdicts}]    {smc_v:7.3f} "
+                  f"{flc_v:7.3f} {flc_v / smc_v:8.2f}",
+                  md=f"| {label} | {smc_deg:.4f} | {flc_deg:.4f} | {flc_deg / smc_deg:.2f} | {verdicts} | {smc_v:.3f} "
+                     f"| {flc_v:.3f} | {flc_v / smc_v:.2f} |")
+    if spectra:
+        head = (f"hilms, FLC: share of the torque commands' power above {BANDS_HZ[0][0]:g} Hz per band, "
+                "mean over the seeds")
+        out.print("\n" + head, md=f"\nOn `hilms`, the FLC's torque commands: share of their power above "
+                                  f"{BANDS_HZ[0][0]:g} Hz per band, mean over the seeds:\n")
+        out.print(f"{'axis':6s} " + " ".join(f"{lo:g}-{hi:g} Hz".rjust(11) for lo, hi in BANDS_HZ),
+                  md="| axis | " + " | ".join(f"{lo:g}-{hi:g} Hz" for lo, hi in BANDS_HZ) + " |\n|---|"
+                     + "---|" * len(BANDS_HZ))
+        for k, axis in ((1, "roll"), (2, "pitch"), (3, "yaw")):
+            shares = np.mean([band_shares(r.series["t"], r.series["u"][:, k]) for r in results[len(jobs):]], axis=0)
+            out.print(f"{axis:6s} " + " ".join(f"{s:11.2f}" for s in shares),
+                      md=f"| {axis} | " + " | ".join(f"{s:.2f}" for s in shares) + " |")
+    out.write()
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """Measure how the rig degrades under each fault (the figures of docs/how-to/faults.md).
 
-Run from the repository root: ``python -m gcs_tools.studies faults [--seeds 0 1 2]``.
+Run from the repository root: ``python -m gcs_tools.studies faults [--seeds 0 1 2]``
+(``--markdown FILE`` also writes the tables as a docs page, with the command and the machine).
 Every case is a headless run of a scenario preset with one config fault event at
 ``t = 5 s`` (``faults.events``); figures are taken from 5 s until the loss-of-control
 failsafe trips (or the end of the run), and the worst over the seeds is printed:
@@ -24,6 +25,7 @@ import argparse
 
 import numpy as np
 
+from gcs_tools.studies.page import Page
 from rig_emulator.api import simulate
 from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_ESTIMATE, ALERT_RATE
 
@@ -81,51 +83,60 @@ def case(scenario, strategy, events, seeds, extra=None):
     return f"| {est:.2f} | {track:.2f} | {yaw:.0f} | {drift} | {fs} | {after} |"
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies faults", description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="a string config override on every case (e.g. control.allocation_priority=clip)")
     ap.add_argument("--motor-only", action="store_true", help="only the motor thrust-loss table")
-    args = ap.parse_args()
+    ap.add_argument("--markdown", metavar="FILE",
+                    help="also write the tables to FILE, with the command and the machine")
+    return ap
+
+
+def main(argv=None) -> None:
+    args = parser().parse_args(argv)
     seeds = args.seeds
     common = dict(kv.split("=", 1) for kv in args.set)
+    out = Page(args.markdown, f"The default plant `hilms`, seeds {' '.join(map(str, seeds))}; runs in the calling "
+                              "process.")
     if args.motor_only:
-        _motor_table(seeds, common)
-        return
-    _all_tables(seeds, common)
+        _motor_table(seeds, common, out)
+    else:
+        _all_tables(seeds, common, out)
+    out.write()
 
 
-def _all_tables(seeds, common):
+def _all_tables(seeds, common, out):
     head = HEAD
     imu_modes = (("stuck", 0.0), ("dead", 0.0), ("bias", 3000.0), ("noise", 50.0))
 
-    print(f"**IMU modules** (hover, smc-flc, robust_mean ensemble; seeds {seeds})\n\n{head}")
+    out.print(f"**IMU modules** (hover, smc-flc, robust_mean ensemble; seeds {seeds})\n\n{head}")
     for n in (1, 2, 3):
         for mode, mag in imu_modes:
             ev = _events("imu", range(n), mode, mag)
-            print(f"| {n} x {mode} {mag:g} |", case("hover", "smc-flc", ev, seeds, common)[2:])
-    print(f"\n**IMU modules while moving** (harmonic attitude, smc-flc; seeds {seeds})\n\n{head}")
+            out.print(f"| {n} x {mode} {mag:g} |", case("hover", "smc-flc", ev, seeds, common)[2:])
+    out.print(f"\n**IMU modules while moving** (harmonic attitude, smc-flc; seeds {seeds})\n\n{head}")
     for mode, mag in imu_modes:
-        print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds, common)[2:])
-    print(f"\n**The same, plain mean ensemble** (the paper's)\n\n{head}")
+        out.print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds, common)[2:])
+    out.print(f"\n**The same, plain mean ensemble** (the paper's)\n\n{head}")
     for mode, mag in imu_modes:
-        print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds,
+        out.print(f"| 1 x {mode} {mag:g} |", case("harmonic", "smc-flc", _events("imu", [2], mode, mag), seeds,
                                                {**common, "estimation.ensemble": "mean"})[2:])
 
-    print(f"\n**Load cells** (hover, smc-flc; seeds {seeds})\n\n{head}")
+    out.print(f"\n**Load cells** (hover, smc-flc; seeds {seeds})\n\n{head}")
     for mode, mag in (("dead", 0.0), ("spike", 200.0), ("stuck", 0.0)):
-        print(f"| cell 2 {mode} {mag:g} |", case("hover", "smc-flc", _events("load_cell", [2], mode, mag), seeds, common)[2:])
+        out.print(f"| cell 2 {mode} {mag:g} |", case("hover", "smc-flc", _events("load_cell", [2], mode, mag), seeds, common)[2:])
 
-    _motor_table(seeds, common)
+    _motor_table(seeds, common, out)
 
 
-def _motor_table(seeds, common):
-    print(f"\n**Motor 1 thrust loss** (hover; seeds {seeds}; {common or 'preset'})\n\n{HEAD}")
+def _motor_table(seeds, common, out):
+    out.print(f"\n**Motor 1 thrust loss** (hover; seeds {seeds}; {common or 'preset'})\n\n{HEAD}")
     for strategy in ("smc-flc", "flc", "pid"):
         for loss in (0.1, 0.2, 0.3, 0.5, 1.0):
             ev = _events("motor", [1], "thrust_loss", loss)
-            print(f"| {strategy} {100 * loss:.0f} % |", case("hover", strategy, ev, seeds, common)[2:], flush=True)
+            out.print(f"| {strategy} {100 * loss:.0f} % |", case("hover", strategy, ev, seeds, common)[2:])
 
 
 if __name__ == "__main__":

@@ -1,11 +1,13 @@
 """The paper's 18 numbers (Table 4, Table 6, Fig. 19) on ``hilms`` over a scan of one setting, mean
-over seeds 0-2 (docs/explanation/readings.md, "The position FLC's rate share", "Table 6's yaw" and "The
-actuation delay").
+over seeds 0-2 (docs/explanation/readings.md, "The position FLC's rate input", "The heading and the
+motors' magnetic field" and "The delay and the joint's friction"; the ``point`` study in
+docs/explanation/paper-fit.md).
 
     python -m gcs_tools.studies paper-numbers rate-share [--values 0.2,0.25,...] [--workers N]
     python -m gcs_tools.studies paper-numbers yaw [--values 0.005,0.03,0.06] [--set KEY=VALUE ...]
     python -m gcs_tools.studies paper-numbers delay [--values 0.006,0.01,...] [--set KEY=VALUE ...]
     python -m gcs_tools.studies paper-numbers point [--set KEY=VALUE ...]     # one setting, all 18 numbers
+    python -m gcs_tools.studies paper-numbers point --markdown FILE   # also write the tables as a docs page
 
 Every point runs the job list of ``rig-gcs identify --paper`` (the reproduction's own sweep, helix
 and rectangle runs: 29 headless runs a seed) with the setting as an override, so its numbers are the
@@ -29,6 +31,7 @@ import numpy as np
 
 from gcs_tools.identify.paper import FACTOR_2, PaperProblem, load_data, log_residual, select_targets
 from gcs_tools.identify.problem import Base
+from gcs_tools.studies.page import Page
 from rig_emulator.config.loader import load_config, parse_override
 from rig_emulator.sweep import run_jobs
 
@@ -77,56 +80,55 @@ def _within(logs) -> int:
     return sum(abs(x) <= FACTOR_2 for x in logs)
 
 
-def rate_share(values, base: list, workers: int) -> None:
-    print("| rate share | Table 6 FLC X / Y / Z (m) | Table 6 SMC-FLC X / Y / Z (m) | Fig. 19 X / Y (m) "
+def rate_share(values, base: list, workers: int, out: Page) -> None:
+    out.print("| rate share | Table 6 FLC X / Y / Z (m) | Table 6 SMC-FLC X / Y / Z (m) | Fig. 19 X / Y (m) "
           "| rms log error, 8 position numbers | within x2 (of 8) | Table 6 within x2 (of 12) "
           "| Table 6 FLC / SMC-FLC psi (deg) |")
-    print("|---|---|---|---|---|---|---|---|")
+    out.print("|---|---|---|---|---|---|---|---|")
     for v in values:
         mean, targets = numbers(base + [("flc.position_rate_share", v)], workers)
         position = [t.metric for t in select_targets(targets, "position")]  # Table 6 X / Y / Z, Fig. 19
         pos = _logs(mean, targets, position)
         t6 = _logs(mean, targets, [t.metric for t in targets if t.metric.startswith("table6.")])
         f = [mean[n] for n in position]
-        print(f"| {v:g} | {f[0]:.3f} / {f[1]:.3f} / {f[2]:.3f} | {f[3]:.3f} / {f[4]:.3f} / {f[5]:.3f} "
+        out.print(f"| {v:g} | {f[0]:.3f} / {f[1]:.3f} / {f[2]:.3f} | {f[3]:.3f} / {f[4]:.3f} / {f[5]:.3f} "
               f"| {f[6]:.3f} / {f[7]:.3f} | {_rms(pos):.3f} | {_within(pos)} "
-              f"| {_within(t6)} | {mean['table6.flc.psi_deg']:.3f} / {mean['table6.smc-flc.psi_deg']:.3f} |",
-              flush=True)
+              f"| {_within(t6)} | {mean['table6.flc.psi_deg']:.3f} / {mean['table6.smc-flc.psi_deg']:.3f} |")
 
 
-def yaw(values, base: list, workers: int) -> None:
+def yaw(values, base: list, workers: int, out: Page) -> None:
     cfg = load_config("hilms", overrides=dict(base))
     roll_pitch = list(cfg["disturbance.torque_noise"])[:2]
-    print("| yaw torque std (N m) | FLC psi (deg) | SMC-FLC psi (deg) | SMC-FLC / FLC |")
-    print("|---|---|---|---|")
+    out.print("| yaw torque std (N m) | FLC psi (deg) | SMC-FLC psi (deg) | SMC-FLC / FLC |")
+    out.print("|---|---|---|---|")
     for v in values:
         mean, _ = numbers(base + [("disturbance.torque_noise", roll_pitch + [v])], workers)
         a, b = mean["table6.flc.psi_deg"], mean["table6.smc-flc.psi_deg"]
-        print(f"| {v:g} | {a:.3f} | {b:.3f} | {b / a:.2f} |", flush=True)
+        out.print(f"| {v:g} | {a:.3f} | {b:.3f} | {b / a:.2f} |")
 
 
-def delay(values, base: list, workers: int) -> None:
+def delay(values, base: list, workers: int, out: Page) -> None:
     """Per sensing-to-actuation delay: the paper's attitude numbers, the ratio of each attitude
     law's error on the harmonic sweep (Table 4) to its error on the helix (Table 6; the SMC's
     inner loop there is SMC-FLC's), all 18 numbers and the claims."""
-    print("| delay (ms) | Table 4 SMC phi / theta | Table 4 FLC phi / theta | Table 6 FLC phi / theta / psi "
+    out.print("| delay (ms) | Table 4 SMC phi / theta | Table 4 FLC phi / theta | Table 6 FLC phi / theta / psi "
           "| Table 6 SMC-FLC phi / theta / psi | SMC Table 4 / Table 6 | FLC Table 4 / Table 6 "
           "| within x2 (of 18) | rms log error | Table 6 within x2 (of 12) | claims held (of the fitted) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    out.print("|---|---|---|---|---|---|---|---|---|---|---|")
     for v in values:
         g, targets = numbers(base + [("control.actuation_delay", v)], workers, claims=True)
         logs = _logs(g, targets, [t.metric for t in targets])
         t6 = _logs(g, targets, [t.metric for t in targets if t.metric.startswith("table6.")])
         held, n = _claims_held(g)
-        print(f"| {v * 1e3:g} | {g['table4.smc.phi_deg']:.2f} / {g['table4.smc.theta_deg']:.2f} "
+        out.print(f"| {v * 1e3:g} | {g['table4.smc.phi_deg']:.2f} / {g['table4.smc.theta_deg']:.2f} "
               f"| {g['table4.flc.phi_deg']:.2f} / {g['table4.flc.theta_deg']:.2f} "
               f"| {g['table6.flc.phi_deg']:.2f} / {g['table6.flc.theta_deg']:.2f} / {g['table6.flc.psi_deg']:.2f} "
               f"| {g['table6.smc-flc.phi_deg']:.2f} / {g['table6.smc-flc.theta_deg']:.2f} / "
               f"{g['table6.smc-flc.psi_deg']:.2f} | {_table4_over_table6(g, 'smc'):.2f} "
               f"| {_table4_over_table6(g, 'flc'):.2f} | {_within(logs)} "
-              f"| {_rms(logs):.3f} | {_within(t6)} | {held} of {n} |", flush=True)
+              f"| {_rms(logs):.3f} | {_within(t6)} | {held} of {n} |")
     paper = {t.metric: t.value for t in targets}
-    print(f"\nthe paper: SMC Table 4 / Table 6 {_table4_over_table6(paper, 'smc'):.2f}, "
+    out.print(f"\nthe paper: SMC Table 4 / Table 6 {_table4_over_table6(paper, 'smc'):.2f}, "
           f"FLC {_table4_over_table6(paper, 'flc'):.2f}")
 
 
@@ -140,55 +142,67 @@ def _table4_over_table6(numbers: dict, law: str) -> float:
     return tilt(f"table4.{law}") / tilt(f"table6.{helix}")
 
 
-def point(base: list, workers: int) -> None:
+def point(base: list, workers: int, out: Page) -> None:
     mean, targets = numbers(base, workers)
     logs = _logs(mean, targets, [t.metric for t in targets])
-    print("| number | paper | hilms | ln(hilms / paper) |")
-    print("|---|---|---|---|")
+    out.print("| number | paper | hilms | ln(hilms / paper) |")
+    out.print("|---|---|---|---|")
     for t, lr in zip(targets, logs):
-        print(f"| {t.metric} | {t.value:.4f} | {mean[t.metric]:.4f} | {lr:+.3f}{' (x2 off)' if abs(lr) > FACTOR_2 else ''} |")
-    print(f"\nrms log error {_rms(logs):.3f}; {_within(logs)} of {len(logs)} within a "
+        out.print(f"| {t.metric} | {t.value:.4f} | {mean[t.metric]:.4f} | {lr:+.3f}{' (x2 off)' if abs(lr) > FACTOR_2 else ''} |")
+    out.print(f"\nrms log error {_rms(logs):.3f}; {_within(logs)} of {len(logs)} within a "
           f"factor 2")
-    level_floor({t.metric: lr for t, lr in zip(targets, logs)})
+    level_floor({t.metric: lr for t, lr in zip(targets, logs)}, out)
 
 
-def level_floor(logs: dict) -> float:
+def level_floor(logs: dict, out: Page) -> float:
     """Print each of :data:`LEVEL_GROUPS`' mean log error and spread about it, and the rms log error
     over all numbers with every group moved to its best common level (its numbers' ratios kept): the
     least a plant that moves only the groups' levels can reach from here. Returns that rms."""
-    print("\n| group | numbers | mean ln(hilms / paper) | rms about the mean |")
-    print("|---|---|---|---|")
+    out.print("\n| group | numbers | mean ln(hilms / paper) | rms about the mean |")
+    out.print("|---|---|---|---|")
     spread = []
     for name, patterns in LEVEL_GROUPS.items():
         member = [v for k, v in logs.items() if any(fnmatch.fnmatchcase(k, p) for p in patterns)]
         m = float(np.mean(member))
         dev = [v - m for v in member]
         spread += dev
-        print(f"| {name} | {len(member)} | {m:+.3f} | {_rms(dev):.3f} |")
+        out.print(f"| {name} | {len(member)} | {m:+.3f} | {_rms(dev):.3f} |")
     if len(spread) != len(logs):
         raise SystemExit(f"the level groups cover {len(spread)} of the {len(logs)} numbers")
     floor = _rms(spread)
-    print(f"\nrms log error with every group at its best level: {floor:.3f}")
+    out.print(f"\nrms log error with every group at its best level: {floor:.3f}")
     return floor
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies paper-numbers", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("study", choices=("rate-share", "yaw", "delay", "point"))
     ap.add_argument("--values", help="comma-separated values of the scanned setting")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="override on every point (repeatable)")
     ap.add_argument("--workers", type=int, default=2)
-    a = ap.parse_args()
-    base = [parse_override(item) for item in a.set]
-    if a.study == "point":
-        point(base, a.workers)
-        return
-    study, default = {"rate-share": (rate_share, RATE_SHARES), "yaw": (yaw, YAW_TORQUES),
-                      "delay": (delay, DELAYS)}[a.study]
-    values = [float(v) for v in a.values.split(",")] if a.values else list(default)
-    study(values, base, a.workers)
+    ap.add_argument("--markdown", metavar="FILE",
+                    help="also write the tables to FILE, with the command and the machine")
+    return ap
 
+
+def main(argv=None) -> None:
+    a = parser().parse_args(argv)
+    base = [parse_override(item) for item in a.set]
+    over = "".join(f", `{k}` = {v!r}" for k, v in base)
+    runs = "39" if a.study == "delay" else "29"
+    out = Page(a.markdown, f"Every point: `rig-gcs identify --paper`'s job list ({runs} headless runs a seed) on "
+                           f"`hilms`{over}, mean over seeds 0-2; errors in degrees and metres, `ln(hilms / paper)` "
+                           "the log residual the fit minimises.", workers=a.workers)
+    if a.study == "point":
+        point(base, a.workers, out)
+    else:
+        study, default = {"rate-share": (rate_share, RATE_SHARES), "yaw": (yaw, YAW_TORQUES),
+                          "delay": (delay, DELAYS)}[a.study]
+        values = [float(v) for v in a.values.split(",")] if a.values else list(default)
+        study(values, base, a.workers, out)
+    out.write()
 
 if __name__ == "__main__":
     main()

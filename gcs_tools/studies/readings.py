@@ -9,7 +9,7 @@ counted. Prints the markdown table (and writes it with ``--markdown FILE``)::
     python -m gcs_tools.studies readings -o /tmp/readings            # seed 0, all readings
     python -m gcs_tools.studies readings -o /tmp/readings --seeds 3 --plant hilms-ideal
 
-Readings (docs/explanation/readings.md, "Readings of Eq. 41 and of the motor ceiling"):
+Readings (docs/explanation/readings.md, "Eq. 41's gains and the 850 gr.F ceiling"):
 
 * K: ``si`` rad/s^2 (as printed), ``thrust`` a thrust difference in N (switching torque K l),
   ``torque`` a torque in N m;
@@ -27,6 +27,8 @@ import argparse
 import math
 import sys
 from pathlib import Path
+
+from gcs_tools.studies.page import Page
 
 #: Eq. 40 at the 850 gr.F ceiling: the supply that reaches it.
 SUPPLY_FOR_850_V = 850.0 / 47.62
@@ -83,16 +85,26 @@ def _from_results(path: Path, over: dict, n_seeds: int):
     return {col["seeds"][0]: secs}
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m gcs_tools.studies readings", description=__doc__.split("\n\n")[0])
     p.add_argument("-o", "--output", required=True, help="directory for each reading's report")
     p.add_argument("--plant", default="hilms-ideal", help="airframe preset the readings run on: %(default)s")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--seeds", type=int, default=1, help="seeds per reading: %(default)s")
     p.add_argument("--workers", type=int, default=None)
     p.add_argument("--only-reading", action="append", help="labels' substring filter (repeatable)")
-    p.add_argument("--markdown", help="also write the table to this file")
-    args = p.parse_args(argv)
+    p.add_argument("--markdown", metavar="FILE",
+                   help="also write the table to FILE, with the command and the machine")
+    return p
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    out = Page(args.markdown, f"Every reading on the plant `{args.plant}`, seed(s) {args.seed}.."
+                              f"{args.seed + args.seeds - 1}, every experiment of `rig-gcs reproduce` (the "
+                              "rectangle's verdicts from its headless run). Columns: K's reading, lambda's reading "
+                              "and the ceiling's (`eq40`: as printed, `supply`: a 17.85 V supply, `convex`: the "
+                              "convex motor curve).", workers=args.workers)
 
     from gcs_tools.reproduce.experiments import EXPERIMENTS
     from gcs_tools.reproduce.plants import PlantRuns, plants_markdown
@@ -102,22 +114,20 @@ def main(argv=None) -> int:
     columns = []
     chosen = [r for r in READINGS if not args.only_reading or any(s in r[0] for s in args.only_reading)]
     for i, (label, over) in enumerate(chosen):
-        out = Path(args.output) / label.replace(", ", "_").replace(" ", "-")
-        earlier = _from_results(out / "results.json", over, args.seeds)
+        where = Path(args.output) / label.replace(", ", "_").replace(" ", "-")
+        earlier = _from_results(where / "results.json", over, args.seeds)
         if earlier is not None:  # resumed: this reading ran before with the same overrides
             columns.append(PlantRuns(label, args.plant, tuple(sorted(over.items())), earlier))
             continue
-        outcome = reproduce(out, seed=args.seed, workers=args.workers, only=names, show_progress=False,
+        outcome = reproduce(where, seed=args.seed, workers=args.workers, only=names, show_progress=False,
                             plants=(args.plant,), seeds=args.seeds, overrides=over, live=False)
         col = outcome.columns[0]
         columns.append(PlantRuns(label, col.airframe, col.overrides, col.sections))
         print(f"[{i + 1}/{len(chosen)}] {label}: done", file=sys.stderr, flush=True)
-    text = (f"Readings on the plant `{args.plant}`, seed(s) {args.seed}..{args.seed + args.seeds - 1} "
-            f"(`python -m gcs_tools.studies readings`; the rectangle's verdicts from its headless run):\n\n"
-            + plants_markdown(columns, args.seeds) + "\n")
-    print(text)
-    if args.markdown:
-        Path(args.markdown).write_text(text)
+    out.print(f"Readings on the plant `{args.plant}`, seed(s) {args.seed}..{args.seed + args.seeds - 1} "
+              f"(`python -m gcs_tools.studies readings`; the rectangle's verdicts from its headless run):\n", md="")
+    out.print(plants_markdown(columns, args.seeds) + "\n")
+    out.write()
     return 0
 
 

@@ -1,6 +1,7 @@
-"""Why Table 6's FLC altitude error is 2.4x the SMC-FLC's on the hardware rig, where the paper's are
-equal (0.2279 / 0.2263 m), and the rectangle's ME Y (docs/explanation/readings.md, "Table 6's altitude:
-the jump at t = 12 s through the mixer").
+"""Table 6's altitude errors on the hardware rig through the mixer: under the roll/pitch-first mixer
+(``control.allocation_priority = "attitude"``) the FLC's is metres where the paper's two are equal
+(0.2279 / 0.2263 m); and the rectangle's ME Y (docs/explanation/readings.md, "The mixer when the
+motors saturate"; the ``bias`` scan in docs/explanation/paper-fit.md).
 
     python -m gcs_tools.studies table6 candidates --priority attitude [--workers N]   # each candidate switched off
     python -m gcs_tools.studies table6 candidates --priority thrust [--workers N]     # the same, the shipped mixer
@@ -9,6 +10,7 @@ the jump at t = 12 s through the mixer").
     python -m gcs_tools.studies table6 priority --priorities clip --cog-mm 0,10,20   # the third reading
     python -m gcs_tools.studies table6 bias [--workers N]         # the common thrust bias: both Z within x2?
     python -m gcs_tools.studies table6 rectangle [--workers N]    # the rectangle's ME X / Y per leg direction
+    python -m gcs_tools.studies table6 priority --markdown FILE   # also write the table as a docs page
 
 Every row is the mean over seeds 0-2 of the 60 s helix (Eq. 46) on ``hilms`` with the named
 overrides (``candidates``: on top of ``control.allocation_priority`` = ``--priority``, default
@@ -24,6 +26,7 @@ import argparse
 import numpy as np
 
 from rig_emulator.control.allocation import SATURATED_COLLECTIVE
+from gcs_tools.studies.page import Page
 from rig_emulator.sweep import SimJob, run_jobs
 
 SEEDS = (0, 1, 2)
@@ -78,42 +81,44 @@ def _m(rows, k):
     return float(np.mean([r[k] for r in rows]))
 
 
-def candidates(workers, settings=None, priority="attitude"):
+def candidates(workers, settings=None, priority="attitude", out=None):
+    out = out or Page(None)
     settings = CANDIDATES if settings is None else settings
     settings = {name: {"control.allocation_priority": priority, **ov} for name, ov in settings.items()}
-    out = _run(settings, workers)
-    print("| switched off / changed | ME Z FLC | ME Z SMC-FLC | ratio | Z outside 12-20 s FLC / SMC-FLC | "
+    res = _run(settings, workers)
+    out.print("| switched off / changed | ME Z FLC | ME Z SMC-FLC | ratio | Z outside 12-20 s FLC / SMC-FLC | "
           "jump window FLC / SMC-FLC | largest drop below Z_des 12-20 s FLC / SMC-FLC (m) | "
           "u1 shifted 12-16 s FLC / SMC-FLC | largest v_Z deficit 12-16 s FLC / SMC-FLC (m/s) | ME theta FLC / SMC-FLC (deg) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    out.print("|---|---|---|---|---|---|---|---|---|---|")
     for name in settings:
-        a, b = out[f"{name}|flc"], out[f"{name}|smc-flc"]
+        a, b = res[f"{name}|flc"], res[f"{name}|smc-flc"]
         fs = sum(r["failsafe"] for r in a + b)
-        print(f"| {name} | {_m(a, 'z_m'):.3f} | {_m(b, 'z_m'):.3f} | {_m(a, 'z_m') / _m(b, 'z_m'):.2f} | "
+        out.print(f"| {name} | {_m(a, 'z_m'):.3f} | {_m(b, 'z_m'):.3f} | {_m(a, 'z_m') / _m(b, 'z_m'):.2f} | "
               f"{_m(a, 'z_outside'):.3f} / {_m(b, 'z_outside'):.3f} | {_m(a, 'z_jump_share'):.3f} / "
               f"{_m(b, 'z_jump_share'):.3f} | {_m(a, 'drop'):.2f} / {_m(b, 'drop'):.2f} | "
               f"{_m(a, 'coll_sat') * 100:.0f} % / {_m(b, 'coll_sat') * 100:.0f} % | "
               f"{_m(a, 'vz_deficit'):.2f} / {_m(b, 'vz_deficit'):.2f} | {_m(a, 'theta_deg'):.3f} / "
-              f"{_m(b, 'theta_deg'):.3f}{f' ({fs} failsafe trips)' if fs else ''} |", flush=True)
+              f"{_m(b, 'theta_deg'):.3f}{f' ({fs} failsafe trips)' if fs else ''} |")
 
 
-def priority(workers, priorities=("attitude", "thrust"), cog_mm=(0.0, 10.0, 20.0, 35.0, 50.0)):
+def priority(workers, priorities=("attitude", "thrust"), cog_mm=(0.0, 10.0, 20.0, 35.0, 50.0), out=None):
+    out = out or Page(None)
     settings = {f"{p}, CoG {cz:g} mm below": {"control.allocation_priority": p,
                                                 "joint.cog_offset": [0.008, -0.008, cz * 1e-3]}
                 for p in priorities for cz in cog_mm}
-    out = _run(settings, workers, strategies=("flc",))
-    print("| allocation priority, CoG height | FLC ME Z per seed (m) | FLC ME theta per seed (deg) | failsafe trips |")
-    print("|---|---|---|---|")
+    res = _run(settings, workers, strategies=("flc",))
+    out.print("| allocation priority, CoG height | FLC ME Z per seed (m) | FLC ME theta per seed (deg) | failsafe trips |")
+    out.print("|---|---|---|---|")
     for name in settings:
-        a = out[f"{name}|flc"]
+        a = res[f"{name}|flc"]
         zs = ", ".join("%.3f" % r["z_m"] for r in a)
         ths = ", ".join("%.2f" % r["theta_deg"] for r in a)
-        print(f"| {name} | {zs} | {ths} | {sum(r['failsafe'] for r in a)} of {len(a)} |", flush=True)
+        out.print(f"| {name} | {zs} | {ths} | {sum(r['failsafe'] for r in a)} of {len(a)} |")
 
 
-def bias(workers, priority="attitude"):
+def bias(workers, priority="attitude", out=None):
     candidates(workers, {f"thrust bias {b:g} gr.F": {"motors.thrust_bias_grf": b}
-                         for b in (0.0, -25.0, -50.0, -60.0, -70.0, -85.0, -100.0)}, priority)
+                         for b in (0.0, -25.0, -50.0, -60.0, -70.0, -85.0, -100.0)}, priority, out)
 
 
 def _rect_reduce(job, r):
@@ -133,22 +138,24 @@ def _rect_reduce(job, r):
             "share_x_legs": float(np.count_nonzero(along_x) / n), "wp": float(np.max(wp))}
 
 
-def rectangle(workers):
+def rectangle(workers, out=None):
+    out = out or Page(None)
     settings = {"hilms": {}, "position rate share 1": {"flc.position_rate_share": 1.0},
                 "leg speed 0.75 m/s": {"guidance.speed": 0.75}}
-    out = _run(settings, workers, strategies=("smc-flc",), scenario="rectangle", reduce=_rect_reduce)
-    print("| setting | ME X | ME Y | Y / X | X error: on X legs + on Y legs | Y error: on X legs + on Y legs | "
+    res = _run(settings, workers, strategies=("smc-flc",), scenario="rectangle", reduce=_rect_reduce)
+    out.print("| setting | ME X | ME Y | Y / X | X error: on X legs + on Y legs | Y error: on X legs + on Y legs | "
           "time on the 5 m legs |")
-    print("|---|---|---|---|---|---|---|")
+    out.print("|---|---|---|---|---|---|---|")
     for name in settings:
-        a = out[f"{name}|smc-flc"]
-        print(f"| {name} | {_m(a, 'x'):.4f} | {_m(a, 'y'):.4f} | {_m(a, 'y') / _m(a, 'x'):.2f} | "
+        a = res[f"{name}|smc-flc"]
+        out.print(f"| {name} | {_m(a, 'x'):.4f} | {_m(a, 'y'):.4f} | {_m(a, 'y') / _m(a, 'x'):.2f} | "
               f"{_m(a, 'x_on_x'):.4f} + {_m(a, 'x_on_y'):.4f} | {_m(a, 'y_on_x'):.4f} + {_m(a, 'y_on_y'):.4f} | "
-              f"{_m(a, 'share_x_legs') * 100:.0f} % |", flush=True)
+              f"{_m(a, 'share_x_legs') * 100:.0f} % |")
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies table6", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("study", choices=("candidates", "priority", "bias", "rectangle"))
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--priority", choices=("attitude", "thrust", "clip"), default="attitude",
@@ -159,17 +166,36 @@ def main():
                     help="priority: the control.allocation_priority values, comma-separated")
     ap.add_argument("--cog-mm", default="0,10,20,35,50",
                     help="priority: the CoG heights below the joint (mm), comma-separated")
-    a = ap.parse_args()
+    ap.add_argument("--markdown", metavar="FILE", help="also write the table to FILE, with the command and the machine")
+    return ap
+
+
+#: what each study's table holds, for the page ``--markdown`` writes
+WHAT = {
+    "candidates": "Mean of seeds 0-2 of the 60 s helix (Eq. 46) on `hilms` with `control.allocation_priority` = "
+                  "`{priority}` and each row's change; ME in metres and degrees (Eq. 45).",
+    "bias": "Mean of seeds 0-2 of the 60 s helix (Eq. 46) on `hilms` with `control.allocation_priority` = "
+            "`{priority}` per common thrust bias; ME in metres and degrees (Eq. 45).",
+    "priority": "The FLC on the 60 s helix (Eq. 46) on `hilms`, seeds 0-2, per allocation priority and height of "
+                "the centre of gravity below the joint.",
+    "rectangle": "The SMC-FLC on the headless rectangle (Sec. 4-4) on `hilms`, mean of seeds 0-2, until the last "
+                 "waypoint; errors in metres.",
+}
+
+
+def main(argv=None):
+    a = parser().parse_args(argv)
+    out = Page(a.markdown, WHAT[a.study].format(priority=a.priority), workers=a.workers)
     if a.study == "candidates":
         rows = {k: v for k, v in list(CANDIDATES.items())[:1]} if a.shipped_only else None
-        candidates(a.workers, rows, priority=a.priority)
+        candidates(a.workers, rows, priority=a.priority, out=out)
     elif a.study == "bias":
-        bias(a.workers, priority=a.priority)
+        bias(a.workers, priority=a.priority, out=out)
     elif a.study == "priority":
-        priority(a.workers, tuple(a.priorities.split(",")), tuple(float(c) for c in a.cog_mm.split(",")))
+        priority(a.workers, tuple(a.priorities.split(",")), tuple(float(c) for c in a.cog_mm.split(",")), out=out)
     else:
-        rectangle(a.workers)
-
+        rectangle(a.workers, out=out)
+    out.write()
 
 if __name__ == "__main__":
     main()
