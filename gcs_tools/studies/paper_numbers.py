@@ -8,6 +8,7 @@ docs/explanation/paper-fit.md).
     python -m gcs_tools.studies paper-numbers delay [--values 0.006,0.01,...] [--set KEY=VALUE ...]
     python -m gcs_tools.studies paper-numbers point [--set KEY=VALUE ...]     # one setting, all 18 numbers
     python -m gcs_tools.studies paper-numbers point --markdown FILE   # also write the tables as a docs page
+    python -m gcs_tools.studies paper-numbers priors [--values C:B,...]  # the text's priors against the numbers
 
 Every point runs the job list of ``rig-gcs identify --paper`` (the reproduction's own sweep, helix
 and rectangle runs: 29 headless runs a seed) with the setting as an override, so its numbers are the
@@ -18,7 +19,11 @@ strategies, Fig. 19 X / Y), their rms log error against the paper and how many a
 third element; roll and pitch keep the preset's); ``delay`` prints, per sensing-to-actuation delay
 (``control.actuation_delay``), the attitude numbers, each attitude law's Table 4 / Table 6 ratio,
 the 18 numbers' summary and how many of the 12 claims ``rig-gcs identify --claims`` fits hold
-(its runs add the shock and extra-mass experiments: 39 a seed).
+(its runs add the shock and extra-mass experiments: 39 a seed). ``priors`` (docs/explanation/paper-fit.md,
+"What the paper's numbers demand against its text") moves the two values the paper's text bounds,
+the roll and pitch Coulomb friction and the thrust bias (``--values COULOMB:BIAS,...``), on the short
+job list (``--paper-variant short``), and prints the 18 numbers' summary, Table 6's altitude and FLC
+attitude errors and the fit's cost without and with the paper's priors (``paper_priors.toml``).
 """
 
 from __future__ import annotations
@@ -39,6 +44,9 @@ SEEDS = (0, 1, 2)  # consecutive: PaperProblem's seeds .. seeds + n - 1
 RATE_SHARES = (0.2, 0.25, 0.3, 0.35, 0.4, 0.42, 0.45, 0.48, 0.5, 0.55, 0.65)
 YAW_TORQUES = (0.005, 0.03, 0.06)
 DELAYS = (0.006, 0.008, 0.010, 0.012, 0.013, 0.014, 0.016)
+#: (roll / pitch Coulomb friction N m, thrust bias gr.F): the shipped preset, each moved towards the
+#: paper's text alone, then both at the priors' means
+PRIOR_POINTS = ((0.05, -50.0), (0.01, -50.0), (0.0, -50.0), (0.05, -25.0), (0.05, 0.0), (0.0, 0.0))
 # Numbers whose ratios to each other no effect of the preset moves much (measured: the delay, the random
 # torque and the Coulomb friction move both tables of an attitude law together, "The actuation delay";
 # the rate share moves the helix's and the rectangle's X / Y together, "The position FLC's rate share"):
@@ -53,11 +61,11 @@ LEVEL_GROUPS = {
 }
 
 
-def numbers(overrides: list, workers: int, claims: bool = False) -> tuple[dict, list]:
+def numbers(overrides: list, workers: int, claims: bool = False, variant: str = "full") -> tuple[dict, list]:
     """The metrics of every target (and with ``claims`` of the 12 claims ``rig-gcs identify
-    --claims`` fits), mean over :data:`SEEDS`, and the targets."""
+    --claims`` fits), mean over :data:`SEEDS`, and the targets (``variant``: PaperProblem's job list)."""
     problem = PaperProblem(Base(airframe="hilms", overrides=tuple(overrides)), seed=SEEDS[0], seeds=len(SEEDS),
-                           claims=claims)
+                           claims=claims, variant=variant)
     return problem.metrics(run_jobs(problem.jobs([], []), workers=workers)), problem.targets
 
 
@@ -132,6 +140,35 @@ def delay(values, base: list, workers: int, out: Page) -> None:
           f"FLC {_table4_over_table6(paper, 'flc'):.2f}")
 
 
+def priors(points, base: list, workers: int, out: Page) -> None:
+    """The roll / pitch Coulomb friction and the thrust bias, the two values the paper's text bounds,
+    at each point of ``points``: the 18 numbers' summary, Table 6's altitude and FLC attitude errors,
+    the fit's cost ``0.5 sum(r^2)`` over the 18 log residuals and the same with the paper's priors
+    (one residual ``(value - mean) / sigma`` each, as ``rig-gcs identify --paper`` adds them)."""
+    from gcs_tools.identify.paper_priors import load_priors
+
+    sigma = {p.key: p for p in load_priors()}
+    fr, bias = sigma["joint.coulomb"], sigma["motors.thrust_bias_grf"]
+    yaw_coulomb = list(load_config("hilms", overrides=dict(base))["joint.coulomb"])[2]
+    out.print("| `joint.coulomb` roll / pitch (N m) | `motors.thrust_bias_grf` (gr.F) | rms log error (within x2 of 18) "
+              "| Table 6 ME Z FLC / SMC-FLC (m) | Table 6 FLC ME phi / theta (deg) | cost | cost with the priors |")
+    out.print("|---|---|---|---|---|---|---|")
+    targets = None
+    for c, b in points:
+        g, targets = numbers(base + [("joint.coulomb", [c, c, yaw_coulomb]), ("motors.thrust_bias_grf", b)], workers,
+                             variant="short")
+        logs = _logs(g, targets, [t.metric for t in targets])
+        cost = 0.5 * float(np.sum(np.square(logs)))
+        prior = 0.5 * (((c - fr.mean) / fr.sigma) ** 2 + ((b - bias.mean) / bias.sigma) ** 2)
+        out.print(f"| {c:g} | {b:g} | {_rms(logs):.3f} ({_within(logs)}) "
+                  f"| {g['table6.flc.z_m']:.3f} / {g['table6.smc-flc.z_m']:.3f} "
+                  f"| {g['table6.flc.phi_deg']:.3f} / {g['table6.flc.theta_deg']:.3f} | {cost:.2f} | {cost + prior:.2f} |")
+    paper = {t.metric: t.value for t in targets}
+    out.print(f"\nthe paper: Table 6 ME Z FLC / SMC-FLC {paper['table6.flc.z_m']:.3f} / {paper['table6.smc-flc.z_m']:.3f} m, "
+              f"FLC ME phi / theta {paper['table6.flc.phi_deg']:.3f} / {paper['table6.flc.theta_deg']:.3f} deg; "
+              f"priors {fr.mean:g} +- {fr.sigma:g} N m, {bias.mean:g} +- {bias.sigma:g} gr.F")
+
+
 def _table4_over_table6(numbers: dict, law: str) -> float:
     """An attitude law's mean roll/pitch error on the harmonic sweep (Table 4) over its error on the
     helix (Table 6; the SMC flies the helix as SMC-FLC's inner loop)."""
@@ -177,8 +214,8 @@ def level_floor(logs: dict, out: Page) -> float:
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies paper-numbers", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("study", choices=("rate-share", "yaw", "delay", "point"))
-    ap.add_argument("--values", help="comma-separated values of the scanned setting")
+    ap.add_argument("study", choices=("rate-share", "yaw", "delay", "point", "priors"))
+    ap.add_argument("--values", help="comma-separated values of the scanned setting (priors: COULOMB:BIAS pairs)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="override on every point (repeatable)")
     ap.add_argument("--workers", type=int, default=2)
@@ -191,12 +228,17 @@ def main(argv=None) -> None:
     a = parser().parse_args(argv)
     base = [parse_override(item) for item in a.set]
     over = "".join(f", `{k}` = {v!r}" for k, v in base)
-    runs = "39" if a.study == "delay" else "29"
-    out = Page(a.markdown, f"Every point: `rig-gcs identify --paper`'s job list ({runs} headless runs a seed) on "
+    runs = {"delay": "39", "priors": "17"}.get(a.study, "29")
+    short = "`--paper-variant short`, " if a.study == "priors" else ""
+    out = Page(a.markdown, f"Every point: `rig-gcs identify --paper`'s job list ({short}{runs} headless runs a seed) on "
                            f"`hilms`{over}, mean over seeds 0-2; errors in degrees and metres, `ln(hilms / paper)` "
                            "the log residual the fit minimises.", workers=a.workers)
     if a.study == "point":
         point(base, a.workers, out)
+    elif a.study == "priors":
+        pts = ([tuple(float(x) for x in v.split(":")) for v in a.values.split(",")] if a.values
+               else list(PRIOR_POINTS))
+        priors(pts, base, a.workers, out)
     else:
         study, default = {"rate-share": (rate_share, RATE_SHARES), "yaw": (yaw, YAW_TORQUES),
                           "delay": (delay, DELAYS)}[a.study]
