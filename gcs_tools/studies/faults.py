@@ -2,6 +2,10 @@
 
 Run from the repository root: ``python -m gcs_tools.studies faults [--seeds 0 1 2]``
 (``--markdown FILE`` also writes the tables as a docs page, with the command and the machine).
+``--false-trips`` instead flies every scenario preset with every strategy on both plants, with no
+fault (seed 0, ``harmonic`` at 2 rad/s): whether the failsafe trips where nothing is wrong, and how
+close the rest come (the largest roll/pitch tracking error, body rate, and what the health checks
+rejected).
 Every case is a headless run of a scenario preset with one config fault event at
 ``t = 5 s`` (``faults.events``); figures are taken from 5 s until the loss-of-control
 failsafe trips (or the end of the run), and the worst over the seeds is printed:
@@ -27,7 +31,7 @@ import numpy as np
 
 from gcs_tools.studies.page import Page
 from rig_emulator.api import simulate
-from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_ESTIMATE, ALERT_RATE
+from rig_emulator.control.supervisor import ALERT_ATTITUDE, ALERT_ESTIMATE, ALERT_NAMES, ALERT_RATE
 
 T_FAULT = 5.0
 HEAD = ("| case | est [deg] | track [deg] | yaw rate [deg/s] | drift [m] | failsafe | after |\n"
@@ -89,6 +93,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="a string config override on every case (e.g. control.allocation_priority=clip)")
     ap.add_argument("--motor-only", action="store_true", help="only the motor thrust-loss table")
+    ap.add_argument("--false-trips", action="store_true",
+                    help="no fault: every scenario preset with every strategy on both plants (seed 0)")
+    ap.add_argument("--workers", type=int, default=2, help="processes for --false-trips (default %(default)s)")
     ap.add_argument("--markdown", metavar="FILE",
                     help="also write the tables to FILE, with the command and the machine")
     return ap
@@ -98,6 +105,12 @@ def main(argv=None) -> None:
     args = parser().parse_args(argv)
     seeds = args.seeds
     common = dict(kv.split("=", 1) for kv in args.set)
+    if args.false_trips:
+        out = Page(args.markdown, "No fault: every scenario preset at its own duration (`harmonic` at 2 rad/s) with "
+                                  "every strategy, seed 0, on both plants.", workers=args.workers)
+        _false_trips(args.workers, out)
+        out.write()
+        return
     out = Page(args.markdown, f"The default plant `hilms`, seeds {' '.join(map(str, seeds))}; runs in the calling "
                               "process.")
     if args.motor_only:
@@ -141,3 +154,51 @@ def _motor_table(seeds, common, out):
 
 if __name__ == "__main__":
     main()
+
+
+STRATEGIES = ("smc-flc", "smc", "flc", "pid")
+
+
+def _no_fault(job, result) -> dict:
+    """What a run without a fault says about false trips (a sweep's reduce: runs in the worker)."""
+    s = result.series
+    t, fs = s["t"], s["failsafe"]
+    err = np.degrees(np.abs(s["euler_des"][:, :2] - s["euler_true"][:, :2])).max(axis=1)
+    i = int(np.argmax(err))
+    health = np.asarray(s["health"]).astype(np.int64)
+    return {"trip": float(t[np.argmax(fs > 0)]) if fs.max() > 0 else None, "cause": int(fs.max()),
+            "err": float(err[i]), "err_t": float(t[i]),
+            "rate": float(np.degrees(np.linalg.norm(s["omega"], axis=1)).max()),
+            "invalid": bool(s["estimate_invalid"].max() > 0),
+            "imu": int(np.bitwise_or.reduce(health[:, 0])), "imu_share": float(np.mean(health[:, 0] != 0)),
+            "cells": int(np.bitwise_or.reduce(health[:, 1])), "cells_share": float(np.mean(health[:, 1] != 0))}
+
+
+def _rejected(mask: int, share: float) -> str:
+    if mask == 0:
+        return "-"
+    which = ", ".join(str(k + 1) for k in range(mask.bit_length()) if mask >> k & 1)
+    return f"{which} ({100 * share:.1f} %)"
+
+
+def _false_trips(workers: int, out: Page) -> None:
+    from pathlib import Path
+
+    from rig_emulator.sweep import SimJob, run_jobs
+
+    scenarios = sorted(p.stem for p in (Path(__file__).resolve().parents[2] / "rig_emulator" / "presets" /
+                                        "scenarios").glob("*.toml"))
+    for plant in ("hilms", "hilms-ideal"):
+        jobs = [SimJob(sc, st, 0, airframe=plant, overrides=(("guidance.omega", 2.0),) if sc == "harmonic" else (),
+                       label=f"{sc} {st}") for sc in scenarios for st in STRATEGIES]
+        res = run_jobs(jobs, workers=workers, reduce=_no_fault)
+        out.print(f"\n**`{plant}`**\n\n| scenario | strategy | failsafe | largest roll / pitch error (deg, at s) "
+                  "| largest body rate (deg/s) | estimate invalid | IMU modules rejected (share of the run) "
+                  "| load cells rejected (share) |\n|---|---|---|---|---|---|---|---|")
+        for job, r in zip(jobs, res):
+            sc, st = job.label.split(" ")
+            cause = ", ".join(name for bit, name in ALERT_NAMES.items() if r["cause"] & bit)
+            trip = f"{cause} at {r['trip']:.2f} s" if r["trip"] is not None else "-"
+            out.print(f"| {sc} | {st} | {trip} | {r['err']:.1f} at {r['err_t']:.1f} | {r['rate']:.0f} "
+                      f"| {'yes' if r['invalid'] else '-'} | {_rejected(r['imu'], r['imu_share'])} "
+                      f"| {_rejected(r['cells'], r['cells_share'])} |")
