@@ -25,6 +25,7 @@ TABLE_HEADING = "### ArduCopter parameters for the rig"
 LINE = re.compile(r"([A-Z][A-Z0-9_]{0,15})[ \t,]+(-?[0-9]+(?:\.[0-9]+)?)")
 # AP_MotorsMulticopter.h: the hover thrust ArduCopter uses and learns is kept within these
 THST_HOVER_MIN, THST_HOVER_MAX = 0.125, 0.6875
+GEOMETRY = re.compile(r"FRAME_CLASS|FRAME_TYPE|SERVO[0-9]+_FUNCTION")  # test_json_cli.py checks these
 
 
 def read_parm(path: str = PARAM_FILE) -> dict[str, float]:
@@ -42,7 +43,7 @@ def read_parm(path: str = PARAM_FILE) -> dict[str, float]:
 
 
 def docs_table() -> dict[str, float]:
-    """name -> value from the docs' table of the rig's ArduCopter motor parameters."""
+    """name -> value from the docs' table of the rig's ArduCopter parameters."""
     text = DOCS.read_text()
     section = text[text.index(TABLE_HEADING):]
     end = section.find("\n#", len(TABLE_HEADING))
@@ -68,11 +69,11 @@ def hilms_motors(u: np.ndarray) -> tuple[np.ndarray, float]:
     return thrust, cfg["airframe.mass"] * cfg["airframe.gravity"] / 4.0
 
 
-def test_every_motor_parameter_is_in_the_docs_with_its_value():
-    motors = {k: v for k, v in read_parm().items() if k.startswith("MOT_")}
+def test_every_tuned_parameter_is_in_the_docs_with_its_value():
+    tuned = {k: v for k, v in read_parm().items() if not GEOMETRY.fullmatch(k)}
     table = docs_table()
-    assert set(motors) == set(table)
-    for name, value in motors.items():
+    assert set(tuned) == set(table)
+    for name, value in tuned.items():
         assert table[name] == value, name
 
 
@@ -117,3 +118,21 @@ def test_the_hover_thrust_is_the_rigs_within_arducopters_range():
 def test_no_battery_voltage_compensation():
     # the rig's motor supply does not sag: MOT_BAT_VOLT_MAX 0 switches the compensation off
     assert read_parm()["MOT_BAT_VOLT_MAX"] == 0.0
+
+
+def test_the_yaw_acceleration_asked_is_a_fraction_of_the_rigs_yaw_authority():
+    """The rig's only yaw torque is the rotors' reaction, kM/kF (f1 - f2 + f3 - f4)
+    (physics/rigid_body.py): at hover two motors can rise to full thrust while the other two fall
+    as much, so the collective holds. ArduCopter's yaw acceleration limit (cdeg/s^2) asks a
+    quarter of that at most, leaving the rest to roll, pitch and altitude."""
+    p = read_parm()
+    cfg = load_config()
+    u = np.linspace(0.0, 1.0, 1001)
+    thrust, weight = hilms_motors(u)
+    headroom = np.mean(thrust[:, -1]) - weight  # N a motor, on average
+    yaw_acc_deg = np.degrees(cfg["airframe.km_over_kf"] * 4.0 * headroom / cfg["airframe.izz"])
+    assert yaw_acc_deg == pytest.approx(74.0, abs=3.0)  # the value the docs quote
+    assert 0.0 < p["ATC_ACCEL_Y_MAX"] / 100.0 <= 0.3 * yaw_acc_deg
+    # ArduCopter's defaults, 270 deg/s^2 and 60 deg/s, are far beyond it
+    assert 27000 / 100.0 > 3.0 * yaw_acc_deg
+    assert 500 <= p["ATC_SLEW_YAW"] <= 6000 / 2  # a slower heading change; its range starts at 5 deg/s
