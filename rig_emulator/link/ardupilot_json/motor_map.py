@@ -19,8 +19,10 @@ SERVO4      4 left, CW      Motor2 (-90 deg, CW)       34
 
 A pulse of ``PWM_MIN_US`` (1000 us) or less is a stopped motor, ``PWM_MAX_US`` (2000 us) full
 command: ``u = (pwm - 1000) / 1000`` clipped to 0..1, the motor driver's voltage command
-``u x motors.voltage_max`` (15 V), so the thrust is linear in it (Eq. 40; ArduCopter's
-``MOT_THST_EXPO 0``). ArduCopter's ``MOT_PWM_MIN`` / ``MOT_PWM_MAX`` must be 1000 / 2000.
+``u x motors.voltage_max`` (15 V); the thrust is the plant's motor curve of it (convex on the
+default plant, Eq. 40's straight line on the ideal one; ArduCopter's thrust model of it:
+docs/how-to/flight-stacks.md). ArduCopter's ``MOT_PWM_MIN`` / ``MOT_PWM_MAX`` must be
+1000 / 2000.
 """
 
 from __future__ import annotations
