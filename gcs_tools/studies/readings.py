@@ -100,8 +100,8 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = parser().parse_args(argv)
-    out = Page(args.markdown, f"Every reading on the plant `{args.plant}`, seed(s) {args.seed}.."
-                              f"{args.seed + args.seeds - 1}, every experiment of `rig-gcs reproduce` (the "
+    seeds = (f"seed {args.seed}" if args.seeds == 1 else f"seeds {args.seed}..{args.seed + args.seeds - 1}")
+    out = Page(args.markdown, f"Every reading on the plant `{args.plant}`, {seeds}, every experiment of `rig-gcs reproduce` (the "
                               "rectangle's verdicts from its headless run). Columns: K's reading, lambda's reading "
                               "and the ceiling's (`eq40`: as printed, `supply`: a 17.85 V supply, `convex`: the "
                               "convex motor curve).", workers=args.workers)
@@ -124,7 +124,7 @@ def main(argv=None) -> int:
         col = outcome.columns[0]
         columns.append(PlantRuns(label, col.airframe, col.overrides, col.sections))
         print(f"[{i + 1}/{len(chosen)}] {label}: done", file=sys.stderr, flush=True)
-    out.print(f"Readings on the plant `{args.plant}`, seed(s) {args.seed}..{args.seed + args.seeds - 1} "
+    out.print(f"Readings on the plant `{args.plant}`, {seeds} "
               f"(`python -m gcs_tools.studies readings`; the rectangle's verdicts from its headless run):\n", md="")
     out.print(plants_markdown(columns, args.seeds) + "\n")
     out.write()
