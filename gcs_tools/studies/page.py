@@ -17,16 +17,20 @@ import time
 from pathlib import Path
 
 
-def machine() -> str:
-    """The CPU model, its core count and the Python version, in words."""
-    cpu = platform.processor() or platform.machine()
+def cpu_model() -> str | None:
+    """The CPU's model name from /proc/cpuinfo (None where there is none)."""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
+                return line.split(":", 1)[1].strip()
     except OSError:
         pass
+    return None
+
+
+def machine() -> str:
+    """The CPU model, its core count and the Python version, in words."""
+    cpu = cpu_model() or platform.processor() or platform.machine()
     return f"{cpu} x{os.cpu_count()}, Python {platform.python_version()}"
 
 

@@ -18,6 +18,7 @@ from rig_emulator.link.ardupilot_json.motor_map import PWM_MAX_US, PWM_MIN_US
 from rig_emulator.link.ardupilot_json.serve_ardupilot import PARAM_FILE
 from rig_emulator.physics.hardware import motor_thrust
 from rig_emulator.simulation.params import physics_params, supply_voltage
+from rig_emulator.testing.docs import table_rows
 
 DOCS = Path(__file__).resolve().parents[4] / "docs" / "how-to" / "flight-stacks.md"
 SHIPPED_HEADING = "### ArduCopter parameters for the rig"
@@ -48,17 +49,8 @@ def read_parm(path: str = PARAM_FILE) -> dict[str, float]:
 
 def docs_table(heading: str) -> dict[str, float]:
     """name -> value from the table of ArduCopter parameters under ``heading`` in the docs."""
-    text = DOCS.read_text()
-    section = text[text.index(heading):]
-    end = section.find("\n#", len(heading))
-    section = section if end < 0 else section[:end]
-    rows = {}
-    for line in section.splitlines():
-        m = re.match(r"\| `([A-Z0-9_]+)` \| (-?[0-9.]+) \|", line)
-        if m:
-            assert m[1] not in rows, f"{m[1]} twice in the docs' table"
-            rows[m[1]] = float(m[2])
-    return rows
+    return {name: float(v) for name, (v,) in
+            table_rows(DOCS, heading, r"\| `([A-Z0-9_]+)` \| (-?[0-9.]+) \|").items()}
 
 
 def hilms_motors(u: np.ndarray) -> tuple[np.ndarray, float]:

@@ -17,6 +17,7 @@ from rig_emulator.config.loader import load_config
 from rig_emulator.link.px4_simulator.serve_px4 import AIRFRAME_FILE
 from rig_emulator.physics.hardware import motor_thrust
 from rig_emulator.simulation.params import physics_params, supply_voltage
+from rig_emulator.testing.docs import table_rows
 
 DOCS = Path(__file__).resolve().parents[4] / "docs" / "how-to" / "flight-stacks.md"
 TABLE_HEADING = "### PX4 parameters for the rig"
@@ -46,17 +47,8 @@ def read_airframe(path: str = AIRFRAME_FILE) -> dict[str, float]:
 
 def docs_table() -> dict[str, tuple[float, float, float]]:
     """name -> (value, low, high) from the docs' table of the rig's PX4 parameters."""
-    text = DOCS.read_text()
-    section = text[text.index(TABLE_HEADING):]
-    end = section.find("\n#", len(TABLE_HEADING))
-    section = section if end < 0 else section[:end]
-    rows = {}
-    for line in section.splitlines():
-        m = re.match(r"\| `([A-Z0-9_]+)` \| (-?[0-9.]+)[^|]* \| [^|]* \| (-?[0-9.]+)\.\.(-?[0-9.]+) \|", line)
-        if m:
-            assert m[1] not in rows, f"{m[1]} twice in the docs' table"
-            rows[m[1]] = (float(m[2]), float(m[3]), float(m[4]))
-    return rows
+    row = r"\| `([A-Z0-9_]+)` \| (-?[0-9.]+)[^|]* \| [^|]* \| (-?[0-9.]+)\.\.(-?[0-9.]+) \|"
+    return {name: tuple(float(x) for x in groups) for name, groups in table_rows(DOCS, TABLE_HEADING, row).items()}
 
 
 def test_px4_finds_the_airframe_by_its_file_name():
