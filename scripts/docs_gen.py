@@ -369,28 +369,14 @@ def _when(timing: Path | None, machine: str) -> str:
 
 def compare_pages(out_dir: Path, command: str, timing: Path | None, machine: str) -> dict[str, str]:
     """docs/generated/compare-verdicts.md (what the command prints and every plug-in's verdicts) and
-    compare-helix.md (the line-then-helix table) from ``DIR/report.md``."""
-    import re
-
+    compare-helix.md (the line-then-helix table) from ``DIR/report.md`` and the summary in ``DIR/results.json``."""
     path = Path(out_dir) / "report.md"
     report = path.read_text()
     verdicts = _section(report, "Verdicts", path)
-    summary = []
-    head = None
-    who = None
-    for line in verdicts.splitlines():
-        m = re.match(r"\*\*(.+) \(yours\)\*\* on `(.+?)`", line)
-        if m:
-            who, head = m.groups(), None
-        elif line.startswith("| metric |"):
-            head = [c.strip() for c in line.strip("|").split("|")][1:]
-        elif line.startswith("| better / same / worse |") and who and head:
-            for vs, cell in zip(head, [c.strip() for c in line.strip("|").split("|")][1:]):
-                b, same, w = (int(x) for x in cell.split("/"))
-                summary.append(f"{who[0]} (yours) on {who[1]} vs {vs[3:]}: better on {b}, same on {same}, "
-                               f"worse on {w} of {b + same + w} metrics")
+    results = Path(out_dir) / "results.json"
+    summary = json.loads(results.read_text()).get("comparison", {}).get("summary")
     if not summary:
-        raise SystemExit(f"docs_gen: no verdict counts in {path}")
+        raise SystemExit(f"docs_gen: no comparison summary in {results} (run reproduce with --controller)")
     intro = (f"Written by `python scripts/docs_gen.py --compare DIR` from the report of `{command}` (`DIR/report.md`)."
              + _when(timing, machine))
     helix = _section(report, "5. Line-then-helix", path)

@@ -76,6 +76,13 @@ def grid_origin(rc: RigConstants, *times: np.ndarray) -> float:
     return math.floor(min(float(x[0]) for x in times) / period + 1e-9) * period
 
 
+def cell_sample_index(rc: RigConstants, t0: float, t_cells: np.ndarray, n_samples: int) -> np.ndarray:
+    """The load-cell sample (counted from the grid origin ``t0``) each row's reading comes from: the last
+    at or before its stamp ``t_cells`` (a log that stamps the readings with the row's time gives the same)."""
+    period = rc.dt * rc.lc_decim
+    return np.clip(np.floor((t_cells - t0) / period + 1e-6).astype(np.int64), 0, n_samples - 1)
+
+
 class MotorChainModel:
     """The chain of the module doc for one log's commands (precomputed once, evaluated per parameter)."""
 
@@ -107,10 +114,7 @@ class MotorChainModel:
             m = u
         self.m = m  # lagged voltage at every physics step, before the delay
         self.k_lc = np.arange(0, n_fine, rc.lc_decim)  # the load cells' sample steps
-        # the sample each row's reading comes from: the last at or before its stamp (a log that stamps the
-        # readings with the row's time, not the sample's, gives the same)
-        self.row_in_lc = np.clip(np.floor((t_cells - self.t0) / (dt * rc.lc_decim) + 1e-6).astype(np.int64), 0,
-                                 self.k_lc.size - 1)
+        self.row_in_lc = cell_sample_index(rc, self.t0, t_cells, self.k_lc.size)
         self.k_rows = k_rows
 
     def voltages(self, delay: float, steps: np.ndarray) -> np.ndarray:

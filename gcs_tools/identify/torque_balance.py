@@ -35,7 +35,7 @@ from scipy.signal import lfilter
 
 from gcs_tools.identify.attitude_smoother import smoothed_attitude
 from gcs_tools.identify.hac import bandwidth, hac_covariance, long_run_covariance
-from gcs_tools.identify.motor_chain import cell_noise_var, grid_origin
+from gcs_tools.identify.motor_chain import cell_noise_var, cell_sample_index, grid_origin
 from gcs_tools.identify.rig_constants import RigConstants
 
 NAMES = ("ixx", "iyy", "izz", "viscous[0]", "viscous[1]", "viscous[2]", "coulomb[0]", "coulomb[1]", "coulomb[2]",
@@ -128,7 +128,7 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     dt_lc = rc.dt * rc.lc_decim
     t0 = grid_origin(rc, t, log.t_cmd, log.t_cells)
     t_lc = t0 + dt_lc * np.arange(int(np.floor((t[-1] - t0) / dt_lc + 1e-9)) + 1)
-    idx = np.clip(np.floor((log.t_cells - t0) / dt_lc + 1e-6).astype(np.int64), 0, t_lc.size - 1)  # each row's sample
+    idx = cell_sample_index(rc, t0, log.t_cells, t_lc.size)
     w = np.column_stack([np.interp(t_lc, t, log.omega[:, i]) for i in range(3)])
     euler = smoothed_attitude(t, log.euler, log.omega)
     phi = np.interp(t_lc, t, euler[:, 0])

@@ -289,8 +289,9 @@ def _what(exp: str, quick: bool) -> str:
 
 def results_part(columns, spec: str) -> dict:
     """``results.json``'s ``comparison``: every metric per plant, experiment and controller over the seeds
-    (per-seed values and their spread) and the verdicts."""
+    (per-seed values and their spread), the verdicts, and the summary the command prints."""
     out = {"rule": compare.RULE, "plugins": compare.plugins(spec), "paper_controllers": list(compare.PAPER_CONTROLLERS),
+           "summary": summary_lines(columns, spec),
            "plants": {}, "raised": [{"plant": p, "controller": who, "seed": s, "run": text}
                                     for p, who, s, text in raised(columns)]}
     for c in columns:

@@ -32,7 +32,7 @@ from rig_emulator.simulation.params import control_params, disturbances, guidanc
 from rig_emulator.simulation.entry_points import BoundEntry
 from rig_emulator.simulation.faults import FaultEvent, FaultStatus, fault_status_inputs, fault_status_of
 from rig_emulator.simulation import log_layout as L
-from rig_emulator.simulation.run import Simulation, step_time_us
+from rig_emulator.simulation.run import Simulation, last_update_us
 
 # keys that fix array sizes or rates of a running rig
 _RESTART_ONLY = ("sim.physics_rate_hz", "sim.control_rate_hz", "sim.log_rate_hz", "sim.seed", "controller.plugin",
@@ -391,14 +391,11 @@ class LiveRig:
         # then moves the physics: the snapshot after step k - 1 carries what those steps took)
         last = max(sim.k - 1, 0)
         rate = sim.cfg["sim.physics_rate_hz"]
-        cells_us = None
-        if sp.simulate:
-            decim = sp.suite.cells.decim
-            cells_us = step_time_us(last // decim * decim, rate)
+        cells_us = last_update_us(last, sp.suite.cells.decim, rate) if sp.simulate else None
         snap.__dict__.update(
             time_s=float(sim.time),
             time_us=sim.time_us,
-            commands_time_us=step_time_us(last // sim.ctrl_div * sim.ctrl_div, rate),
+            commands_time_us=last_update_us(last, sim.ctrl_div, rate),
             cells_time_us=cells_us,
             armed=sim.armed,
             position=tuple(t[0:3]),

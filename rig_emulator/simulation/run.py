@@ -36,6 +36,13 @@ def step_time_us(k: int, rate_hz: float) -> int:
     return int(round(int(k) * 1_000_000 / rate))
 
 
+def last_update_us(k: int, div: int, rate_hz: float) -> int:
+    """Time, in whole microseconds, of the last step at or before step ``k`` of something that runs
+    every ``div`` physics steps from step 0 (a control update, a load-cell sample): what a value
+    it produced and a later message carries was taken at."""
+    return step_time_us(int(k) // div * div, rate_hz)
+
+
 @dataclass
 class SimResult:
     """What a headless run produced: the recorded time series and its figures."""
@@ -47,6 +54,10 @@ class SimResult:
     sim_time_s: float
     wall_time_s: float
     series: dict = field(init=False)
+    #: physics steps per control update (the config's control rate, or the plug-in's) and per
+    #: load-cell sample, as the run used them: when the logged commands and readings were taken
+    control_div: int = 1
+    cells_div: int = 1
 
     def __post_init__(self):
         self.series = {name: self.column(name) for name in L.NAMES}
@@ -281,4 +292,6 @@ class Simulation:
             steps=n_steps,
             sim_time_s=n_steps * self.dt,
             wall_time_s=wall,
+            control_div=self.ctrl_div,
+            cells_div=self.sensing.params.suite.cells.decim,
         )

@@ -54,9 +54,8 @@ from rig_emulator.link.telemetry.ideal_sensors import load_sensor_model
 from rig_emulator.link.commands.modes import OFFBOARD, FlightModes
 from rig_emulator.link.telemetry.context import TelemetryContext
 from rig_emulator.physics.rotation import quat_from_euler
-from rig_emulator.sensors.load_cell import load_load_cell_config
 from rig_emulator.simulation.live import RigSnapshot
-from rig_emulator.simulation.run import step_time_us
+from rig_emulator.simulation.run import last_update_us, step_time_us
 
 DEFAULT_HOME = Home(35.7, 51.4, 1200.0)  # the live rig's default (rig_emulator/link/server.py)
 COMPID = M.MAV_COMP_ID_AUTOPILOT1
@@ -156,8 +155,8 @@ def row_snapshot(series: dict, i: int, guidance: str, physics_rate_hz: float | N
     if physics_rate_hz is not None:
         k = round(t * physics_rate_hz)
         time_us = step_time_us(k, physics_rate_hz)
-        commands_us = step_time_us(k // ctrl_div * ctrl_div, physics_rate_hz)
-        cells_us = step_time_us(k // cells_div * cells_div, physics_rate_hz)
+        commands_us = last_update_us(k, ctrl_div, physics_rate_hz)
+        cells_us = last_update_us(k, cells_div, physics_rate_hz)
     euler = s["euler"][i]
     nan3 = (math.nan,) * 3
     pos_des = s["pos_des"][i]
@@ -217,10 +216,8 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1, label: str 
     guidance = cfg["guidance.type"]
     next_second = -math.inf
     other_div = max(1, int(round(float(cfg["sim.log_rate_hz"]) / OTHER_STREAMS_MAX_HZ)))
-    ctrl_div = int(round(cfg["sim.physics_rate_hz"] / cfg["sim.control_rate_hz"]))
-    cells_div = int(load_load_cell_config(cfg["sensor_models.zemic_l6d"] or None)["load_cell"]["decimation"])
     for k in range(n):
-        snap = row_snapshot(series, k, guidance, cfg["sim.physics_rate_hz"], ctrl_div, cells_div)
+        snap = row_snapshot(series, k, guidance, cfg["sim.physics_rate_hz"], result.control_div, result.cells_div)
         t = snap.time_s
         if k == 0:
             for msg in label_messages(label) + mission_messages(cfg, sysid):
