@@ -166,20 +166,11 @@ def guard_rows(model: "MotorChainModel", p: np.ndarray, k: float | None = None) 
     return rows_after(risk, model)
 
 
-def held_samples(log, model: "MotorChainModel", p: np.ndarray) -> np.ndarray | None:
-    """Load-cell samples the firmware's guards held, **seen** in the log, or None when the log's rows do
-    not show every sample (rows slower than the load cells: :func:`guard_rows` predicts them instead).
-
-    The filtered reading ``y_j = y_{j-1} + alpha (x_j - y_{j-1})`` is inverted sample by sample to the
-    reading ``x_j`` the filter took in. A reading a guard rejected is replaced by the last accepted one
-    (estimation/load_cell_filter.py), so it repeats it to the float's precision and, having been
-    rejected, lies a guard's threshold from the thrust; a reading that repeats by chance (the 10-bit
-    counts) lies within the noise of it. Held: repeated within :data:`HELD_TOL_N`, and the chain's thrust
-    at ``p`` either within :data:`HELD_K` noise sigmas of the jump guard's threshold away from it or of the
-    upper guard. (n_lc, 4) bool.
-    """
-    rc = model.rc
-    a = rc.lc_alpha
+def _raw_readings(log, model: "MotorChainModel"):
+    """The readings the firmware's IIR took in, inverted sample by sample from the filtered ones
+    (``y_j = y_{j-1} + alpha (x_j - y_{j-1})``): (x, y) each (n_lc, 4), or None when the log's rows do not
+    show every load-cell sample or there is no IIR to invert."""
+    a = model.rc.lc_alpha
     n_lc = model.k_lc.size
     first = np.full(n_lc, -1)
     rows = np.arange(model.row_in_lc.size)
@@ -194,6 +185,27 @@ def held_samples(log, model: "MotorChainModel", p: np.ndarray) -> np.ndarray | N
     y[seen] = log.thrust[first[seen]]
     x = np.full((n_lc, 4), np.nan)
     x[1:] = y[:-1] + (y[1:] - y[:-1]) / a
+    return x, y
+
+
+def held_samples(log, model: "MotorChainModel", p: np.ndarray) -> np.ndarray | None:
+    """Load-cell samples the firmware's guards held, **seen** in the log, or None when the log's rows do
+    not show every sample (rows slower than the load cells: :func:`guard_rows` predicts them instead).
+
+    The filtered reading is inverted sample by sample to the reading ``x_j`` the filter took in
+    (:func:`_raw_readings`). A reading a guard rejected is replaced by the last accepted one
+    (estimation/load_cell_filter.py), so it repeats it to the float's precision and, having been
+    rejected, lies a guard's threshold from the thrust; a reading that repeats by chance (the 10-bit
+    counts) lies within the noise of it. Held: repeated within :data:`HELD_TOL_N`, and the chain's thrust
+    at ``p`` either within :data:`HELD_K` noise sigmas of the jump guard's threshold away from it or of the
+    upper guard. (n_lc, 4) bool.
+    """
+    rc = model.rc
+    raw = _raw_readings(log, model)
+    if raw is None:
+        return None
+    x = raw[0]
+    n_lc = x.shape[0]
     f = model.thrust(p, model.voltages(p[6], model.k_lc))
     sd = cell_noise_sd(rc, f)
     # rejected: the reading jumped by more than the guard's threshold from the value now repeated, or lay
@@ -202,6 +214,51 @@ def held_samples(log, model: "MotorChainModel", p: np.ndarray) -> np.ndarray | N
     repeat = np.zeros((n_lc, 4), dtype=bool)
     repeat[1:] = np.abs(x[1:] - x[:-1]) <= HELD_TOL_N
     return np.nan_to_num(repeat & far, nan=False).astype(bool)
+
+
+@dataclass
+class RepairedCells:
+    thrust: np.ndarray   # (n_rows, 4) filtered thrusts, N, with the held samples' readings replaced
+    noise_var: np.ndarray  # (n_rows, 4) variance of their own noise, N^2 (none from a replaced sample)
+    rows: np.ndarray     # (n_rows,) bool: rows whose value is defined
+    held_share: float    # share of load-cell samples held in any cell
+
+
+def repaired_cells(log, rc: RigConstants, p: np.ndarray) -> RepairedCells | None:
+    """The load cells' filtered thrusts as if no guard had held a reading, for a balance that needs every
+    row (gcs_tools/identify/torque_balance.py), or None where the log does not show every sample.
+
+    A guard that holds a reading feeds the firmware's IIR the last accepted value instead; the filter's
+    output then remembers it for about half a second (:func:`rows_after`), and where the thrust swings
+    near the jump guard's threshold (a steep motor curve, a stiff controller) that is most of an armed
+    flight. The readings the filter took in are known (:func:`_raw_readings`), so each held one is
+    replaced by the chain's thrust at ``p`` (the fitted motor chain, within its noise of the truth) and the
+    series filtered again: every other reading keeps its own value and noise."""
+    model = MotorChainModel(log.t, log.v_cmd, rc, log.t_cmd, log.t_cells)
+    raw = _raw_readings(log, model)
+    held = held_samples(log, model, p)
+    if raw is None or held is None:
+        return None
+    x, y = raw
+    f = model.thrust(p, model.voltages(p[6], model.k_lc))
+    x = np.where(held, f, x)
+    a = rc.lc_alpha
+    ok = np.all(np.isfinite(x[1:]), axis=1)
+    x[0] = y[0]
+    if not np.all(np.isfinite(x[0])) or not ok.all():
+        return None
+    yf = lfilter([a], [1.0, -(1.0 - a)], x[1:], axis=0, zi=((1.0 - a) * y[:1]))[0]
+    yf = np.vstack([y[:1], yf])
+    v_raw = (cell_noise_sd(rc, f) ** 2 + LC_STEP_N ** 2 / 12.0) * ~held
+    b = (1.0 - a) ** 2
+    vf = lfilter([a * a], [1.0, -b], v_raw, axis=0, zi=(b * (a / (2.0 - a)) * v_raw[:1]))[0]
+    r = model.row_in_lc
+    rows = r >= 0
+    thrust = np.full((r.size, 4), np.nan)
+    var = np.full((r.size, 4), np.nan)
+    thrust[rows] = yf[r[rows]]
+    var[rows] = vf[r[rows]]
+    return RepairedCells(thrust=thrust, noise_var=var, rows=rows, held_share=float(np.any(held, axis=1).mean()))
 
 
 def rows_after(samples: np.ndarray, model: "MotorChainModel") -> np.ndarray:

@@ -160,13 +160,14 @@ def markdown_page(study: dict, command: str, machine: str) -> str:
              "within 10 % of range | scatter / stated sigma |", "|---|---|---|---|---|---|"]
     for base, keys in _group(study["rows"]).items():
         rows = [study["rows"][k] for k in keys]
-        lo, hi = DRAW_RANGES[keys[0]]
+        ranges = [f"{DRAW_RANGES[k][0]:g}..{DRAW_RANGES[k][1]:g}" for k in keys]
+        drawn = ranges[0] if len(set(ranges)) == 1 else " / ".join(ranges)
         name = base + (" " + " / ".join(k[len(base):] for k in keys) if len(keys) > 1 else "")
         sig = " / ".join("-" if r["scatter_over_sigma"] is None else f"{r['scatter_over_sigma']:.2f}" for r in rows)
         cov = " / ".join(f"{r['coverage']:.0%}" for r in rows)
         err = " / ".join(f"{r['median_error_pct']:.1f}" for r in rows)
         close = " / ".join(f"{r['within_10pct']:.0%}" for r in rows)
-        lines.append(f"| {name} | {lo:g}..{hi:g} | {cov} | {err} | {close} | {sig} |")
+        lines.append(f"| {name} | {drawn} | {cov} | {err} | {close} | {sig} |")
     lines += ["", f"Model check: {study['matched_draws_flagged']} of {study['n']} matched draws flagged.", "",
               "| log | seed | model check |", "|---|---|---|"]
     for m in study["mismatch"]:

@@ -10,20 +10,32 @@ with ``T`` the motors' torque (A6: ``l (F4 - F2)``, ``l (F1 - F3)``, ``k_M (F1 -
 the random torque. The load cells give the thrusts only through the firmware's IIR filter ``H``; so,
 as one does with a filtered output, every term is passed through the same filter: ``H[T]`` is what
 the log's load cells say, and ``H[w']`` is the difference quotient of ``H[w]`` (no differentiation
-of a noisy signal). The body rates (ATTITUDE) are interpolated to the load cells' sample times and
-filtered as they were; gravity in B, ``g_B = g (sin theta, cos theta sin phi, cos theta cos phi)``,
-from the attitude estimate smoothed with the gyros after the flight (gcs_tools/identify/attitude_smoother.py). The balance is linear in
-``(I_xx, I_yy, I_zz, c_v (3), c_c (3), m r_cg (3))``: ordinary least squares, each axis weighted by
-the inverse of its residual spread (two steps), with the HAC covariance of gcs_tools/identify/hac.py.
-The disarmed swings carry the friction and the pendulum with no motor torque and no random torque;
-the chirps the inertia.
+of a noisy signal). Where the firmware's jump guard held a reading, the filter took in the last
+accepted value instead, and its output remembers that for half a second; a stiff loop on a steep motor
+curve trips the guard often enough to leave almost no armed row untouched, so the held readings are
+replaced by the fitted motor chain's thrust and the readings filtered again
+(gcs_tools/identify/motor_chain.py, ``repaired_cells``). The body rates (ATTITUDE) are interpolated
+to the load cells' sample times and filtered as they were; gravity in B,
+``g_B = g (sin theta, cos theta sin phi, cos theta cos phi)``, from the attitude estimate smoothed with
+the gyros after the flight (gcs_tools/identify/attitude_smoother.py). The balance is linear in
+``(I_xx, I_yy, I_zz, c_v (3), c_c (3), m r_cg (3))``.
+
+Weights: feasible generalised least squares. A first fit weights each axis by the inverse of its
+residual spread; then each row by the inverse of the spread the noise model expects there (the random
+torque grows with the rotor load, the load cells' vibration with the thrust), scaled per axis to the
+residuals of the armed rows and of the disarmed ones separately (:func:`_row_weights`), twice. The
+disarmed swings carry the friction and the pendulum with no motor torque and no random torque, and
+weigh accordingly; armed, the random torque also moves the body rates the friction is written in, which
+biases the friction read from the armed rows (the yaw viscous friction by 10-30 % of its range at the top of the
+random torque's range, measured on logs of known truth) and the weights keep that out. The
+covariance is HAC (gcs_tools/identify/hac.py) on the weighted rows.
 
 Random torque: the residual of the balance is ``-H[n]`` plus the load cells' own noise. ``n`` is the
 rig's first-order coloured noise (corner ``disturbance.torque_noise_corner_hz``, level ``sigma`` at hover
 times the rotor load ``L``); its stationary variance after the sampling and ``H`` is
-``kappa sigma^2 L^2`` (closed form below), the load cells' is known from their datasheet figures. So
-``sigma_a^2 = sum(r^2 - v_lc) / (kappa sum L^2)`` over the armed rows, its interval from the HAC
-variance of that mean.
+``kappa sigma^2 L^2`` (closed form below), the load cells' is known from their datasheet figures (none
+from a replaced reading). So ``sigma_a^2 = sum(r^2 - v_lc) / (kappa sum L^2)`` over the armed rows, its
+interval from the HAC variance of that mean.
 """
 
 from __future__ import annotations
@@ -35,7 +47,7 @@ from scipy.signal import lfilter
 
 from gcs_tools.identify.attitude_smoother import smoothed_attitude
 from gcs_tools.identify.hac import bandwidth, hac_covariance, long_run_covariance
-from gcs_tools.identify.motor_chain import cell_noise_var, cell_sample_index, grid_origin
+from gcs_tools.identify.motor_chain import cell_noise_var, cell_sample_index, grid_origin, repaired_cells
 from gcs_tools.identify.rig_constants import RigConstants
 
 NAMES = ("ixx", "iyy", "izz", "viscous[0]", "viscous[1]", "viscous[2]", "coulomb[0]", "coulomb[1]", "coulomb[2]",
@@ -57,7 +69,7 @@ class TorqueFit:
     X: np.ndarray             # (n_rows, 3, 12) regressors
     Y: np.ndarray             # (n_rows, 3) regressand (held parameters' terms taken out)
     free: list                # indices of NAMES estimated
-    axis_weight: np.ndarray   # (3,) 1 / residual spread per axis (the second step's weights)
+    row_weight: np.ndarray    # (n_rows, 3) the weights of the last least-squares step
     kappa: float
 
     @property
@@ -80,9 +92,9 @@ class TorqueFit:
         pvar = np.full(self.Y.shape, np.nan)
         edges = np.arange(np.floor(t[0]), t[-1] + window_s, window_s)
         Xf = self.X[:, :, self.free]
-        wt = self.axis_weight
+        wt = self.row_weight
         k = len(self.free)
-        Aall = (Xf[self.used] * wt[None, :, None]).reshape(-1, k)
+        Aall = (Xf[self.used] * wt[self.used][:, :, None]).reshape(-1, k)
         bread_all = Aall.T @ Aall
         cf = self.cov[np.ix_(self.free, self.free)]
         meat_all = bread_all @ cf @ bread_all
@@ -92,8 +104,8 @@ class TorqueFit:
             train = self.used & ~w
             if train.sum() < 100 or not np.any(w & self.used):
                 continue
-            A = (Xf[train] * wt[None, :, None]).reshape(-1, k)
-            y = (self.Y[train] * wt[None, :]).ravel()
+            A = (Xf[train] * wt[train][:, :, None]).reshape(-1, k)
+            y = (self.Y[train] * wt[train]).ravel()
             beta = np.linalg.lstsq(A, y, rcond=None)[0]
             out[w] = self.Y[w] - Xf[w] @ beta
             bi = np.linalg.pinv(A.T @ A)
@@ -117,6 +129,45 @@ def noise_variance_factor(rc: RigConstants) -> float:
         return 1.0
     b = 1.0 - a
     return float(a * a * (1.0 + b * rho) / ((1.0 - b * b) * (1.0 - b * rho)))
+
+
+REWEIGHT = 2
+
+
+def _noise_level(res, armed, load, lc_var, kappa, dt):
+    """The random torque's level at hover per axis from the residuals of the armed rows, and its 95 %
+    interval: ``sigma_a^2 = sum(r^2 - v_lc) / (kappa sum L^2)``, the interval from the HAC variance."""
+    sig = np.zeros(3)
+    ci = np.zeros((3, 2))
+    L2 = load[armed] ** 2
+    for ax in range(3):
+        z = res[armed, ax] ** 2 - lc_var[armed, ax]
+        s2 = z.sum() / (kappa * L2.sum())
+        u = z - kappa * s2 * L2
+        lag_z = bandwidth(u, dt)
+        var_s2 = long_run_covariance(u[:, None], lag_z)[0, 0] / (kappa * L2.sum()) ** 2
+        half = 1.96 * np.sqrt(var_s2)
+        sig[ax] = np.sqrt(max(s2, 0.0))
+        # where the residual leaves less than the load cells' own noise (a quiet axis), the estimate is 0
+        # and the interval reaches up to the estimate's own resolution, not to 0
+        ci[ax] = np.sqrt(max(s2 - half, 0.0)), np.sqrt(max(s2 + half, half))
+    return sig, ci
+
+
+def _row_weights(res, used, armed, load, lc_var, kappa, sig):
+    """Weights of the rows for feasible generalised least squares: one over the residual's spread the
+    noise model expects at each row (the random torque grows with the rotor load, the load cells'
+    vibration with the thrust), scaled per axis to what the residuals show, separately for the armed
+    rows and the rest (a disarmed swing has no random torque and quiet load cells: its spread is the
+    regressors' own errors)."""
+    model = kappa * (sig[None, :] * load[:, None]) ** 2 + lc_var
+    w = np.zeros_like(model)
+    for grp in (armed, used & ~armed):
+        if not grp.any():
+            continue
+        s = np.mean(res[grp] ** 2, axis=0) / np.mean(model[grp], axis=0)
+        w[grp] = 1.0 / np.sqrt(s[None, :] * model[grp])
+    return w
 
 
 def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None = None,
@@ -151,7 +202,10 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     Hgyro_x = _iir(w[:, 1] * jr, a)
     Hgyro_y = _iir(-w[:, 0] * jr, a)
     pick = lambda x: x[idx]  # noqa: E731
-    y_lc = log.thrust
+    # the load cells as if no guard had held a reading (the chain's thrust in place of each held one), so
+    # that every row counts; a log that does not show every sample keeps the rows the chain explains
+    rep = repaired_cells(log, rc, motor_fit.values)
+    y_lc = log.thrust if rep is None else rep.thrust
     T = np.column_stack([rc.arm * (y_lc[:, 3] - y_lc[:, 1]), rc.arm * (y_lc[:, 0] - y_lc[:, 2]),
                          rc.km * (y_lc[:, 0] - y_lc[:, 1] + y_lc[:, 2] - y_lc[:, 3])])
     n = t.size
@@ -178,7 +232,7 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     X[:, 1, 9] = G[:, 2]
     X[:, 2, 9] = -G[:, 1]
     X[:, 2, 10] = G[:, 0]
-    used = (t >= t[0] + SKIP_S) & motor_fit.used  # the rows whose load-cell readings the chain explains
+    used = (t >= t[0] + SKIP_S) & (motor_fit.used if rep is None else rep.rows)
     if rows is not None:
         used &= rows
     fixed = dict(fixed or {})
@@ -187,12 +241,29 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
         Y = Y - X[:, :, j] * v
     Xu = X[used][:, :, free].reshape(-1, len(free))
     Yu = Y[used].ravel()
+    load = rc.k_v * motor_fit.model_voltage.sum(axis=1) / (rc.mass * rc.g)
+    v_cell = cell_noise_var(rc, motor_fit.true_thrust) if rep is None else rep.noise_var
+    lc_var = np.column_stack([rc.arm ** 2 * (v_cell[:, 1] + v_cell[:, 3]), rc.arm ** 2 * (v_cell[:, 0] + v_cell[:, 2]),
+                              rc.km ** 2 * v_cell.sum(axis=1)])
+    kappa = noise_variance_factor(rc)
+    armed = used & log.armed
     b = np.linalg.lstsq(Xu, Yu, rcond=None)[0]
     r = (Yu - Xu @ b).reshape(-1, 3)
     scale = np.sqrt(np.mean(r ** 2, axis=0))
     wts = np.tile(1.0 / scale, used.sum())
     b = np.linalg.lstsq(Xu * wts[:, None], Yu * wts, rcond=None)[0]
     e = Yu - Xu @ b
+    res = np.full((n, 3), np.nan)
+    res[used] = e.reshape(-1, 3)
+    sig, ci = _noise_level(res, armed, load, lc_var, kappa, log.dt)
+    row_w = np.tile(1.0 / scale, (n, 1))
+    for _ in range(REWEIGHT):
+        row_w = _row_weights(res, used, armed, load, lc_var, kappa, sig)
+        wts = row_w[used].ravel()
+        b = np.linalg.lstsq(Xu * wts[:, None], Yu * wts, rcond=None)[0]
+        e = Yu - Xu @ b
+        res[used] = e.reshape(-1, 3)
+        sig, ci = _noise_level(res, armed, load, lc_var, kappa, log.dt)
     ew = e * wts
     lags = bandwidth(ew, log.dt, groups=3)
     cov = np.zeros((12, 12))
@@ -201,28 +272,5 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     beta[free] = b
     for j, v in fixed.items():
         beta[j] = v
-    res = np.full((n, 3), np.nan)
-    res[used] = e.reshape(-1, 3)
-    # random torque
-    load = rc.k_v * motor_fit.model_voltage.sum(axis=1) / (rc.mass * rc.g)
-    v_cell = cell_noise_var(rc, motor_fit.true_thrust)
-    lc_var = np.column_stack([rc.arm ** 2 * (v_cell[:, 1] + v_cell[:, 3]), rc.arm ** 2 * (v_cell[:, 0] + v_cell[:, 2]),
-                              rc.km ** 2 * v_cell.sum(axis=1)])
-    kappa = noise_variance_factor(rc)
-    armed = used & log.armed
-    sig = np.zeros(3)
-    ci = np.zeros((3, 2))
-    L2 = load[armed] ** 2
-    for ax in range(3):
-        z = res[armed, ax] ** 2 - lc_var[armed, ax]
-        s2 = z.sum() / (kappa * L2.sum())
-        u = z - kappa * s2 * L2
-        lag_z = bandwidth(u, log.dt)
-        var_s2 = long_run_covariance(u[:, None], lag_z)[0, 0] / (kappa * L2.sum()) ** 2
-        half = 1.96 * np.sqrt(var_s2)
-        sig[ax] = np.sqrt(max(s2, 0.0))
-        # where the residual leaves less than the load cells' own noise (a quiet axis), the estimate is 0
-        # and the interval reaches up to the estimate's own resolution, not to 0
-        ci[ax] = np.sqrt(max(s2 - half, 0.0)), np.sqrt(max(s2 + half, half))
     return TorqueFit(values=beta, cov=cov, residuals=res, used=used, lags=lags, noise_sigma=sig, noise_interval=ci,
-                     load=load, lc_var=lc_var, X=X, Y=Y, free=free, axis_weight=1.0 / scale, kappa=kappa)
+                     load=load, lc_var=lc_var, X=X, Y=Y, free=free, row_weight=row_w, kappa=kappa)

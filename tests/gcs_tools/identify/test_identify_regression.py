@@ -6,13 +6,11 @@ knows none of the drawn values), and checked against the truth: the error and wh
 interval holds it. The test's draws and seeds are its own: the intervals' scales were measured on the
 calibration study's (gcs_tools/identify/regression.py, ``INTERVAL_SCALE_*``).
 
-* the centre of gravity (3 axes), the motor chain (gains, bias, curve, delay) and the roll and pitch
-  Coulomb friction: within 10 % of their plausible range;
-* every effect but the random torque: its 95 % interval holds the truth in at least 85 % of the
-  (parameter, draw) pairs, and the model check finds each log explained;
-* the viscous friction and the yaw Coulomb friction are within 10 % of their range in only 55-75 % of
-  the calibration study's draws, and the random torque's level in 30-75 %: their intervals are checked,
-  not that bound (docs/how-to/identify.md, "How far to trust it").
+* every effect (the centre of gravity, the motor chain, the delay, the viscous and Coulomb friction of
+  each axis and the random torque's level): within 10 % of its plausible range in at least 95 % of the
+  (parameter, draw) pairs, and a pair outside that with its interval holding the truth;
+* every effect: its 95 % interval holds the truth in at least 85 % of the (parameter, draw) pairs, and
+  the model check finds each log explained.
 
 Three draws cost about a minute and a half of CPU (three 90 s flights at 20-30x real time, the .tlog
 export at 500 Hz, three fits of about 14 s). The calibration study (`rig-gcs identify --calibration-study
@@ -34,11 +32,11 @@ N_DRAWS = 3
 DRAW_SEED = 20261128  # the test's own draws, not the study's
 LOG_SEED = 4100  # noise seeds of the flights: the fit never sees them
 #: recovered blind within WITHIN of their range
-CLOSE = [k for k in DRAW_RANGES if k.startswith(("joint.cog_offset", "motors.", "control."))] + [
-    "joint.coulomb[0]", "joint.coulomb[1]"]
+CLOSE = list(DRAW_RANGES)
 #: their intervals hold the truth (COVERAGE of the pairs)
-INTERVALS = [k for k in DRAW_RANGES if not k.startswith("disturbance.")]
+INTERVALS = list(DRAW_RANGES)
 WITHIN = 0.10
+CLOSE_SHARE = 0.95  # of the (parameter, draw) pairs within WITHIN (the study: 85-100 % per parameter)
 COVERAGE = 0.85  # of the (parameter, draw) pairs whose 95 % interval holds the truth
 
 
@@ -63,13 +61,17 @@ def blind_fits(tmp_path_factory):
 
 
 def test_recovered_blind_within_a_tenth_of_their_range(blind_fits):
-    misses = []
+    misses, pairs = [], 0
     for hidden, est, _ in blind_fits:
         for key in CLOSE:
             lo, hi = DRAW_RANGES[key]
-            if abs(est[key]["value"] - hidden[key]) > WITHIN * (hi - lo):
-                misses.append((key, est[key]["value"], hidden[key]))
-    assert not misses, misses
+            pairs += 1
+            e = est[key]
+            if abs(e["value"] - hidden[key]) > WITHIN * (hi - lo):
+                misses.append((key, e["value"], hidden[key], e["lo"], e["hi"]))
+    assert len(misses) <= (1.0 - CLOSE_SHARE) * pairs, misses
+    # a miss is one the fit owns up to: its interval still holds the truth
+    assert all(lo <= truth <= hi for _, _, truth, lo, hi in misses), misses
 
 
 def test_intervals_hold_the_truth(blind_fits):
