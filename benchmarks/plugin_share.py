@@ -28,6 +28,10 @@ WHAT = {
     "python-pid": "the same kernel run as plain Python (`controller.call = \"python\"`, numpy scalars throughout)",
     "trivial": "a Python controller that returns the hover thrust (hover)",
     "cascaded": "`examples.cascaded_pid:CascadedPID`, a 30-line cascaded PID in plain Python",
+    "cascaded-builtins": "the same law, bit for bit, with `min(max(...))` clamps, `range(3)` loops and `math.sin` "
+                         "looked up (`benchmarks.idioms`)",
+    "cascaded-numpy": "the same again, reading numpy scalars from the observation's views instead of `.tolist()` "
+                      "floats",
 }
 
 CASES = {
@@ -36,6 +40,8 @@ CASES = {
     "python-pid": ("helix", "rig_emulator.controllers.examples.pid:PID", "python"),
     "trivial": ("hover", "benchmarks.plugins:TrivialHover", "python"),
     "cascaded": ("helix", "rig_emulator.controllers.examples.cascaded_pid:CascadedPID", "python"),
+    "cascaded-builtins": ("helix", "benchmarks.idioms:CascadedPIDBuiltins", "python"),
+    "cascaded-numpy": ("helix", "benchmarks.idioms:CascadedPIDNumpy", "python"),
 }
 
 
