@@ -7,6 +7,9 @@ share table shows between them is the cost of the Python idiom alone
   clamped with ``min(max(...))``, loops over ``range(3)`` and ``math.sin`` looked up at every call;
 * :class:`CascadedPIDNumpy` - the same, and the numbers read as numpy scalars by indexing the
   observation's views instead of ``.tolist()``.
+
+Each ``update`` is written out whole, as a user would write it: a helper shared between them would add a
+call to every update and measure itself along with the idiom.
 """
 
 import math

@@ -1,6 +1,7 @@
 """Arm the served hardware rig from its tilted hang into a mission take-off and watch both positions.
 
-    python scripts/measure_ground.py [--contact hold|frictionless] [--seconds 25] [--seed 0]
+    python scripts/measure_ground.py [--contact hold|frictionless] [--seconds 25] [--seed 0] [--runs N]
+    python scripts/measure_ground.py --runs 4 --markdown docs/generated/served-takeoff.md
 
 A rig (``hilms``, the default plant, hanging at its rest attitude) is served in this process and
 flown over a real socket from pymavlink: a mission of a take-off to 2.5 m and a 20 s hold at home
@@ -9,7 +10,8 @@ script records LOCAL_POSITION_NED (the onboard position) and SIM_STATE (the phys
 prints, for each, the largest horizontal distance from home, that distance while the vehicle is
 within 5 cm of the ground, the position at the end and when it left the ground; and every
 STATUSTEXT. ``--contact frictionless`` flies the same with the ideal plant's ground
-(docs/explanation/sim-state.md).
+(docs/explanation/sim-state.md). ``--markdown FILE`` flies both ground contacts ``--runs`` times each
+and writes the ranges over the runs as the page that docs/explanation/sim-state.md includes.
 """
 
 from __future__ import annotations
@@ -27,13 +29,11 @@ from rig_emulator.testing.rig import MissionClient, RigThread, command, connect,
 ENU = M.MAV_FRAME_LOCAL_ENU
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--contact", choices=("hold", "frictionless"), default="hold", help="sim.ground_contact")
-    ap.add_argument("--seconds", type=float, default=25.0, help="simulated seconds recorded after arming")
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
-    overrides = {"sim.ground_contact": args.contact, "sim.seed": args.seed}
+def fly_once(contact: str, seconds: float, seed: int, quiet: bool = False) -> dict:
+    """One served take-off from the hang: per vehicle, the largest horizontal distance from home, that
+    distance within 5 cm of the ground, the position at the end and when it left the ground (s after
+    the first LOCAL_POSITION_NED after arming, or None)."""
+    overrides = {"sim.ground_contact": contact, "sim.seed": seed}
     with RigThread(speedup=0.0, airframe="hilms", overrides=overrides) as rig:
         home = rig.server.ctx.home
         conn = connect(rig.tcp_url)
@@ -43,14 +43,15 @@ def main(argv=None) -> int:
                  MissionItem(seq=1, frame=ENU, command=M.MAV_CMD_NAV_WAYPOINT, x=0.0, y=0.0, z=2.5, param1=20.0)]
         assert MissionClient(conn).upload(items) == M.MAV_MISSION_ACCEPTED
         att = recv(conn, "ATTITUDE", 30)
-        print(f"hanging at roll {math.degrees(att.roll):.1f} deg, pitch {math.degrees(att.pitch):.1f} deg; "
-              f"ground contact {args.contact}")
+        if not quiet:
+            print(f"hanging at roll {math.degrees(att.roll):.1f} deg, pitch {math.degrees(att.pitch):.1f} deg; "
+                  f"ground contact {contact}")
         assert command(conn, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, 4).result == 0
         assert command(conn, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == 0
         t0 = None
         onboard, physics = [], []
         n = 0
-        while not onboard or onboard[-1][0] - t0 < args.seconds:
+        while not onboard or onboard[-1][0] - t0 < seconds:
             m = recv(conn, ["LOCAL_POSITION_NED", "SIM_STATE", "STATUSTEXT"], 30)
             if m is None:
                 break
@@ -58,7 +59,8 @@ def main(argv=None) -> int:
             if n % 200 == 0:
                 conn.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
             if m.get_type() == "STATUSTEXT":
-                print("STATUSTEXT", m.text)
+                if not quiet:
+                    print("STATUSTEXT", m.text)
             elif m.get_type() == "LOCAL_POSITION_NED":
                 t = stamp_s(m)
                 t0 = t if t0 is None else t0
@@ -66,15 +68,80 @@ def main(argv=None) -> int:
             elif onboard:  # SIM_STATE carries no time stamp: the last LOCAL_POSITION_NED's
                 physics.append((onboard[-1][0], *global_to_local_ned(home, m.lat_int * 1e-7, m.lon_int * 1e-7, m.alt)))
         conn.close()
-    for name, rows in (("onboard (LOCAL_POSITION_NED)", onboard), ("physics (SIM_STATE)", physics)):
+    out = {}
+    for name, rows in (("onboard", onboard), ("physics", physics)):
         a = np.array(rows)
         h = np.hypot(a[:, 1], a[:, 2])
         low = a[:, 3] > -0.05
         up = a[~low, 0]
-        print(f"{name}: largest horizontal distance from home {h.max():.3f} m, within 5 cm of the ground "
-              f"{(h[low].max() if low.any() else 0.0):.3f} m; at the end N {a[-1, 1]:+.2f} E {a[-1, 2]:+.2f} "
-              f"D {a[-1, 3]:+.2f}; left the ground at "
-              + (f"{up[0] - t0:.2f} s" if up.size else "never"))
+        out[name] = {"max_m": float(h.max()), "on_ground_max_m": float(h[low].max()) if low.any() else 0.0,
+                     "end_ned": a[-1, 1:4].tolist(), "end_m": float(h[-1]),
+                     "left_s": float(up[0] - t0) if up.size else None}
+    return out
+
+
+def _report(contact: str, r: dict) -> None:
+    for name, what in (("onboard", "onboard (LOCAL_POSITION_NED)"), ("physics", "physics (SIM_STATE)")):
+        v = r[name]
+        n, e, d = v["end_ned"]
+        left = f"{v['left_s']:.2f} s" if v["left_s"] is not None else "never"
+        print(f"{what}: largest horizontal distance from home {v['max_m']:.3f} m, within 5 cm of the ground "
+              f"{v['on_ground_max_m']:.3f} m; at the end N {n:+.2f} E {e:+.2f} D {d:+.2f}; left the ground at {left}")
+
+
+def _span(xs, digits: int = 3) -> str:
+    lo, hi = f"{min(xs):.{digits}f}", f"{max(xs):.{digits}f}"
+    return lo if lo == hi else f"{lo}-{hi}"
+
+
+def markdown(results: dict, command: str, machine: str, seconds: float, seed: int) -> str:
+    """The page docs/explanation/sim-state.md includes: per ground contact, the ranges over the runs."""
+    runs = len(next(iter(results.values())))
+    lines = [f"Written by `{command}` on {machine}: the served `hilms` rig armed from its hang into a mission "
+             f"take-off to 2.5 m, seed {seed}, {seconds:g} s of simulated time after arming, {runs} "
+             f"run{'s' if runs != 1 else ''} per ground contact (they differ because the served rig's clock runs on while the arm command travels); "
+             "ranges over the runs.", "",
+             "| ground contact | vehicle | leaves the ground after | largest distance from home | "
+             "distance while within 5 cm of the ground | distance from home at the end |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for contact, rs in results.items():
+        for name, what in (("onboard", "onboard (LOCAL_POSITION_NED)"), ("physics", "physics (SIM_STATE)")):
+            vs = [r[name] for r in rs]
+            left = [v["left_s"] for v in vs if v["left_s"] is not None]
+            left_txt = f"{_span(left, 2)} s" if left else "never"
+            if len(left) < len(vs) and left:
+                left_txt += f" ({len(vs) - len(left)} never)"
+            lines.append(f"| `{contact}` | {what} | {left_txt} | {_span([v['max_m'] for v in vs])} m | "
+                         f"{_span([v['on_ground_max_m'] for v in vs])} m | {_span([v['end_m'] for v in vs])} m |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--contact", choices=("hold", "frictionless"), default="hold", help="sim.ground_contact")
+    ap.add_argument("--seconds", type=float, default=25.0, help="simulated seconds recorded after arming")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--runs", type=int, default=1, help="take-offs per ground contact")
+    ap.add_argument("--markdown", metavar="FILE",
+                    help="fly both ground contacts --runs times each and write the ranges as a documentation page")
+    args = ap.parse_args(argv)
+    if not args.markdown:
+        for _ in range(args.runs):
+            _report(args.contact, fly_once(args.contact, args.seconds, args.seed))
+        return 0
+    import sys
+
+    from gcs_tools.studies.page import command_line, machine
+
+    results = {c: [fly_once(c, args.seconds, args.seed, quiet=True) for _ in range(args.runs)]
+               for c in ("hold", "frictionless")}
+    for c, rs in results.items():
+        for r in rs:
+            _report(c, r)
+    text = markdown(results, command_line(["python scripts/measure_ground.py", *sys.argv[1:]]), machine(),
+                    args.seconds, args.seed)
+    with open(args.markdown, "w") as f:
+        f.write(text)
     return 0
 
 
