@@ -101,18 +101,18 @@ def markdown(results: dict, command: str, machine: str, seconds: float, seed: in
              f"take-off to 2.5 m, seed {seed}, {seconds:g} s of simulated time after arming, {runs} "
              f"run{'s' if runs != 1 else ''} per ground contact (they differ because the served rig's clock runs on while the arm command travels); "
              "ranges over the runs.", "",
-             "| ground contact | vehicle | leaves the ground after | largest distance from home | "
-             "distance while within 5 cm of the ground | distance from home at the end |",
+             "| ground contact | vehicle | leaves the ground after (s) | largest distance from home (m) | "
+             "distance while within 5 cm of the ground (m) | distance from home at the end (m) |",
              "| --- | --- | --- | --- | --- | --- |"]
     for contact, rs in results.items():
         for name, what in (("onboard", "onboard (LOCAL_POSITION_NED)"), ("physics", "physics (SIM_STATE)")):
             vs = [r[name] for r in rs]
             left = [v["left_s"] for v in vs if v["left_s"] is not None]
-            left_txt = f"{_span(left, 2)} s" if left else "never"
+            left_txt = _span(left, 2) if left else "never"
             if len(left) < len(vs) and left:
                 left_txt += f" ({len(vs) - len(left)} never)"
-            lines.append(f"| `{contact}` | {what} | {left_txt} | {_span([v['max_m'] for v in vs])} m | "
-                         f"{_span([v['on_ground_max_m'] for v in vs])} m | {_span([v['end_m'] for v in vs])} m |")
+            lines.append(f"| `{contact}` | {what} | {left_txt} | {_span([v['max_m'] for v in vs])} | "
+                         f"{_span([v['on_ground_max_m'] for v in vs])} | {_span([v['end_m'] for v in vs])} |")
     return "\n".join(lines) + "\n"
 
 

@@ -37,5 +37,5 @@ def test_the_page_gives_ranges_per_contact_and_vehicle(takeoff):
                                                 [" `frictionless` ", " onboard (LOCAL_POSITION_NED) "],
                                                 [" `frictionless` ", " physics (SIM_STATE) "]]
     o = takeoff["onboard"]
-    assert f"| {o['max_m']:.3f}-{o['max_m'] + 0.5:.3f} m |" in rows[0]  # a range over the two runs
+    assert f"| {o['max_m']:.3f}-{o['max_m'] + 0.5:.3f} |" in rows[0]  # a range over the two runs
     assert "(1 never)" in rows[1]
