@@ -375,6 +375,17 @@ def cmd_divergence(args) -> int:
                     rows.append((scenario, airframe, seed, stats, threshold, duration))
                     if not args.json:
                         print(format_row(scenario, airframe, seed, stats, threshold), flush=True)
+    if args.markdown:
+        import shlex
+
+        from protocol.atomic_file import atomic_write_text
+        from rig_emulator.headless.divergence import markdown_table
+
+        typed = " ".join(["rig-emulator", *(shlex.quote(a) for a in sys.argv[1:])])
+        head = (f"Written by `{typed}`: onboard minus SIM_STATE, strategy "
+                f"{args.strategy}, the scenarios' durations.\n\n")
+        atomic_write_text(args.markdown, head + markdown_table([(sc, af, seed, st, thr) for sc, af, seed, st, thr, _
+                                                                 in rows], tuple(args.at)))
     if args.json:
         print(json.dumps([{"scenario": sc, "airframe": af, "seed": seed, "strategy": args.strategy, "duration_s": dur,
                            "threshold_m": thr, "max_m": st.max_m, "rms_m": st.rms_m,
@@ -471,6 +482,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--at", type=float, nargs="*", default=[30.0, 60.0], metavar="S",
                    help="times (s) at which to print the vector (default: 30 60)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.add_argument("--markdown", metavar="FILE", help="also write the figures as a documentation page (a table)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override one parameter")
     p.set_defaults(func=cmd_divergence)
 

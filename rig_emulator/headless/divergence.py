@@ -126,6 +126,23 @@ def run_stats(scenario: str, airframe: str, strategy: str, seed: int, duration: 
     return divergence_stats(result.series, threshold, times), threshold, float(cfg["sim.duration"])
 
 
+def markdown_table(rows, times=(30.0, 60.0)) -> str:
+    """The runs as the table docs/explanation/sim-state.md includes: ``rows`` of (scenario, airframe, seed,
+    stats, threshold); a vector column per time in ``times`` (empty where the run ended before it)."""
+    thresholds = {thr for *_, thr in rows}
+    over = f"over {next(iter(thresholds)):g} m from" if len(thresholds) == 1 else "over the threshold from"
+    head = ["scenario", "plant"] + (["seed"] if len({r[2] for r in rows}) > 1 else []) + [
+        "max", "rms", over] + [f"at {t:g} s (N, E, D)" for t in times]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for scenario, airframe, seed, st, _ in rows:
+        cells = [scenario, airframe] + ([str(seed)] if "seed" in head else []) + [
+            f"{st.max_m:.2f} m", f"{st.rms_m:.2f} m",
+            "never" if math.isnan(st.first_over_s) else f"{st.first_over_s:.1f} s"]
+        cells += [", ".join(f"{x:+.2f}" for x in st.at[t]) if t in st.at else "" for t in times]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def format_row(scenario: str, airframe: str, seed: int, stats: DivergenceStats, threshold: float) -> str:
     first = "never" if math.isnan(stats.first_over_s) else f"{stats.first_over_s:.1f} s"
     at = "  ".join(f"t={t:g} s: N {n:+.2f} E {e:+.2f} D {d:+.2f}" for t, (n, e, d) in stats.at.items())

@@ -75,3 +75,24 @@ def test_the_divergence_command_prints_both_plants(capsys):
     lines = capsys.readouterr().out.strip().splitlines()
     assert [line.split()[:3] for line in lines] == [["hover", "hilms", "3"], ["hover", "hilms-ideal", "3"]]
     assert all("max" in line and "rms" in line and "slid on ground" in line for line in lines)
+
+
+def test_the_divergence_command_writes_its_table(tmp_path, capsys, monkeypatch):
+    from rig_emulator.cli import main
+
+    page = tmp_path / "divergence.md"
+    argv = ["divergence", "--scenario", "hover", "--duration", "2", "--seed", "3", "--at", "1", "5",
+            "--markdown", str(page)]
+    monkeypatch.setattr("sys.argv", ["rig-emulator", *argv])
+    assert main(argv) == 0
+    printed = capsys.readouterr().out.strip().splitlines()
+    head, table = page.read_text().split("\n\n", 1)
+    assert head.startswith(f"Written by `rig-emulator divergence --scenario hover --duration 2 --seed 3 --at 1 5 "
+                           f"--markdown {page}`")
+    rows = [r.strip("|").split("|") for r in table.splitlines()]
+    assert [c.strip() for c in rows[0]] == ["scenario", "plant", "max", "rms", "over 1 m from", "at 1 s (N, E, D)",
+                                            "at 5 s (N, E, D)"]
+    assert [[c.strip() for c in r[:2]] for r in rows[2:]] == [["hover", "hilms"], ["hover", "hilms-ideal"]]
+    for r, line in zip(rows[2:], printed):  # the figures the command printed
+        assert f"max {float(r[2].split()[0]):6.2f} m" in line
+        assert r[5].count(",") == 2 and r[6].strip() == ""  # a vector at 1 s; the 2 s run ends before 5 s
