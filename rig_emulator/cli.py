@@ -384,8 +384,7 @@ def cmd_divergence(args) -> int:
         typed = " ".join(["rig-emulator", *(shlex.quote(a) for a in sys.argv[1:])])
         head = (f"Written by `{typed}`: onboard minus SIM_STATE, strategy "
                 f"{args.strategy}, the scenarios' durations.\n\n")
-        atomic_write_text(args.markdown, head + markdown_table([(sc, af, seed, st, thr) for sc, af, seed, st, thr, _
-                                                                 in rows], tuple(args.at)))
+        atomic_write_text(args.markdown, head + markdown_table(rows, tuple(args.at)))
     if args.json:
         print(json.dumps([{"scenario": sc, "airframe": af, "seed": seed, "strategy": args.strategy, "duration_s": dur,
                            "threshold_m": thr, "max_m": st.max_m, "rms_m": st.rms_m,

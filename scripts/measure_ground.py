@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 
 import numpy as np
 
@@ -129,8 +130,6 @@ def main(argv=None) -> int:
         for _ in range(args.runs):
             _report(args.contact, fly_once(args.contact, args.seconds, args.seed))
         return 0
-    import sys
-
     from gcs_tools.studies.page import command_line, machine
 
     results = {c: [fly_once(c, args.seconds, args.seed, quiet=True) for _ in range(args.runs)]

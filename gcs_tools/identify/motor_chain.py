@@ -63,6 +63,7 @@ class MotorChainFit:
     lags: int
     rms: float
     used: np.ndarray            # (n_rows,) bool: the rows fitted
+    model: "MotorChainModel"    # the chain of the log's commands the fit evaluated
 
     @property
     def sigma(self) -> np.ndarray:
@@ -200,18 +201,20 @@ def held_samples(log, model: "MotorChainModel", p: np.ndarray) -> np.ndarray | N
     at ``p`` either within :data:`HELD_K` noise sigmas of the jump guard's threshold away from it or of the
     upper guard. (n_lc, 4) bool.
     """
-    rc = model.rc
     raw = _raw_readings(log, model)
     if raw is None:
         return None
-    x = raw[0]
-    n_lc = x.shape[0]
-    f = model.thrust(p, model.voltages(p[6], model.k_lc))
+    return _held(raw[0], model.thrust(p, model.voltages(p[6], model.k_lc)), model.rc)
+
+
+def _held(x: np.ndarray, f: np.ndarray, rc: RigConstants) -> np.ndarray:
+    """:func:`held_samples`' test on the readings ``x`` the filter took in and the chain's thrusts ``f``
+    at the same samples, (n_lc, 4) each."""
     sd = cell_noise_sd(rc, f)
     # rejected: the reading jumped by more than the guard's threshold from the value now repeated, or lay
     # above the guard's ceiling
     far = (np.abs(x - f) > rc.lc_jump_N - HELD_K * sd) | (f > rc.lc_max_N - HELD_K * sd)
-    repeat = np.zeros((n_lc, 4), dtype=bool)
+    repeat = np.zeros(x.shape, dtype=bool)
     repeat[1:] = np.abs(x[1:] - x[:-1]) <= HELD_TOL_N
     return np.nan_to_num(repeat & far, nan=False).astype(bool)
 
@@ -224,7 +227,7 @@ class RepairedCells:
     held_share: float    # share of load-cell samples held in any cell
 
 
-def repaired_cells(log, rc: RigConstants, p: np.ndarray) -> RepairedCells | None:
+def repaired_cells(log, model: "MotorChainModel", p: np.ndarray) -> RepairedCells | None:
     """The load cells' filtered thrusts as if no guard had held a reading, for a balance that needs every
     row (gcs_tools/identify/torque_balance.py), or None where the log does not show every sample.
 
@@ -233,22 +236,21 @@ def repaired_cells(log, rc: RigConstants, p: np.ndarray) -> RepairedCells | None
     near the jump guard's threshold (a steep motor curve, a stiff controller) that is most of an armed
     flight. The readings the filter took in are known (:func:`_raw_readings`), so each held one is
     replaced by the chain's thrust at ``p`` (the fitted motor chain, within its noise of the truth) and the
-    series filtered again: every other reading keeps its own value and noise."""
-    model = MotorChainModel(log.t, log.v_cmd, rc, log.t_cmd, log.t_cells)
+    series filtered again: every other reading keeps its own value and noise. ``model``: the chain of the
+    log's commands (the fit's, :attr:`MotorChainFit.model`)."""
     raw = _raw_readings(log, model)
-    held = held_samples(log, model, p)
-    if raw is None or held is None:
+    if raw is None:
         return None
+    rc = model.rc
     x, y = raw
     f = model.thrust(p, model.voltages(p[6], model.k_lc))
+    held = _held(x, f, rc)
     x = np.where(held, f, x)
-    a = rc.lc_alpha
-    ok = np.all(np.isfinite(x[1:]), axis=1)
     x[0] = y[0]
-    if not np.all(np.isfinite(x[0])) or not ok.all():
+    if not np.isfinite(x).all():
         return None
-    yf = lfilter([a], [1.0, -(1.0 - a)], x[1:], axis=0, zi=((1.0 - a) * y[:1]))[0]
-    yf = np.vstack([y[:1], yf])
+    a = rc.lc_alpha
+    yf = lfilter([a], [1.0, -(1.0 - a)], x, axis=0, zi=((1.0 - a) * y[:1]))[0]  # yf[0] = y[0]: x[0] is y[0]
     v_raw = (cell_noise_sd(rc, f) ** 2 + LC_STEP_N ** 2 / 12.0) * ~held
     b = (1.0 - a) ** 2
     vf = lfilter([a * a], [1.0, -b], v_raw, axis=0, zi=(b * (a / (2.0 - a)) * v_raw[:1]))[0]
@@ -401,4 +403,4 @@ def fit_motor_chain(log, rc: RigConstants, rows: np.ndarray | None = None, fixed
     pred, true = model.filtered(p)
     return MotorChainFit(values=p, cov=cov, residuals=log.thrust - pred, predicted=pred, true_thrust=true,
                          model_voltage=model.voltages(p[6], model.k_rows),
-                         lags=lags, rms=float(np.sqrt(np.mean(e ** 2))), used=use)
+                         lags=lags, rms=float(np.sqrt(np.mean(e ** 2))), used=use, model=model)

@@ -132,7 +132,7 @@ def noise_variance_factor(rc: RigConstants) -> float:
     return float(a * a * (1.0 + b * rho) / ((1.0 - b * b) * (1.0 - b * rho)))
 
 
-REWEIGHT = 2
+REWEIGHT = 2  # rounds of row weights after the first fit (each from the last round's residuals)
 
 
 def _noise_level(res, armed, load, lc_var, kappa, dt):
@@ -205,7 +205,7 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     pick = lambda x: x[idx]  # noqa: E731
     # the load cells as if no guard had held a reading (the chain's thrust in place of each held one), so
     # that every row counts; a log that does not show every sample keeps the rows the chain explains
-    rep = repaired_cells(log, rc, motor_fit.values)
+    rep = repaired_cells(log, motor_fit.model, motor_fit.values)
     y_lc = log.thrust if rep is None else rep.thrust
     T = np.column_stack([rc.arm * (y_lc[:, 3] - y_lc[:, 1]), rc.arm * (y_lc[:, 0] - y_lc[:, 2]),
                          rc.km * (y_lc[:, 0] - y_lc[:, 1] + y_lc[:, 2] - y_lc[:, 3])])
@@ -250,19 +250,14 @@ def fit_torque_balance(log, rc: RigConstants, motor_fit, rows: np.ndarray | None
     armed = used & log.armed
     b = np.linalg.lstsq(Xu, Yu, rcond=None)[0]
     r = (Yu - Xu @ b).reshape(-1, 3)
-    scale = np.sqrt(np.mean(r ** 2, axis=0))
-    wts = np.tile(1.0 / scale, used.sum())
-    b = np.linalg.lstsq(Xu * wts[:, None], Yu * wts, rcond=None)[0]
-    e = Yu - Xu @ b
+    row_w = np.tile(1.0 / np.sqrt(np.mean(r ** 2, axis=0)), (n, 1))  # first: one weight per axis
     res = np.full((n, 3), np.nan)
-    res[used] = e.reshape(-1, 3)
-    sig, ci = _noise_level(res, armed, load, lc_var, kappa, log.dt)
-    row_w = np.tile(1.0 / scale, (n, 1))
-    # the rows' noise model holds where the log shows every load-cell sample; in slower rows (a ground
+    # then, where the log shows every load-cell sample, the rows' noise model; in slower rows (a ground
     # station's 100 Hz log) the regressors' own errors rule the armed rows, whose weight then falls so far
     # that the disarmed swings alone set the balance's scale through the inertia (0.84x in a served log)
-    for _ in range(REWEIGHT if rep is not None else 0):
-        row_w = _row_weights(res, used, armed, load, lc_var, kappa, sig)
+    for k in range(1 + (REWEIGHT if rep is not None else 0)):
+        if k:
+            row_w = _row_weights(res, used, armed, load, lc_var, kappa, sig)
         wts = row_w[used].ravel()
         b = np.linalg.lstsq(Xu * wts[:, None], Yu * wts, rcond=None)[0]
         e = Yu - Xu @ b

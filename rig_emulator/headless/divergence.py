@@ -128,13 +128,14 @@ def run_stats(scenario: str, airframe: str, strategy: str, seed: int, duration: 
 
 def markdown_table(rows, times=(30.0, 60.0)) -> str:
     """The runs as the table docs/explanation/sim-state.md includes: ``rows`` of (scenario, airframe, seed,
-    stats, threshold); a vector column per time in ``times`` (empty where the run ended before it)."""
-    thresholds = {thr for *_, thr in rows}
+    stats, threshold, ...) as ``rig-emulator divergence`` collects them; a vector column per time in
+    ``times`` (empty where the run ended before it)."""
+    thresholds = {r[4] for r in rows}
     over = f"over {next(iter(thresholds)):g} m from" if len(thresholds) == 1 else "over the threshold from"
     head = ["scenario", "plant"] + (["seed"] if len({r[2] for r in rows}) > 1 else []) + [
         "max", "rms", over] + [f"at {t:g} s (N, E, D)" for t in times]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for scenario, airframe, seed, st, _ in rows:
+    for scenario, airframe, seed, st, *_ in rows:
         cells = [scenario, airframe] + ([str(seed)] if "seed" in head else []) + [
             f"{st.max_m:.2f} m", f"{st.rms_m:.2f} m",
             "never" if math.isnan(st.first_over_s) else f"{st.first_over_s:.1f} s"]

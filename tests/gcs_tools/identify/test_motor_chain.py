@@ -2,7 +2,7 @@
 
 A synthetic log: commands that swing the motors between stop and full supply, so that the thrust jumps
 by about the jump guard's threshold between two load-cell samples; readings with the datasheet's noise,
-passed through the firmware's guard and IIR exactly as estimation/load_cell_filter.py does it. The
+passed through the firmware's own guard and IIR (estimation/load_cell_filter.py). The
 repaired series must follow the readings the guard would have let through, and the noise it expects
 must leave out the replaced readings.
 """
@@ -16,30 +16,28 @@ from scipy.signal import lfilter
 from gcs_tools.identify.motor_chain import LC_STEP_N, MotorChainModel, cell_noise_sd, held_samples, repaired_cells
 from gcs_tools.identify.rig_constants import rig_constants
 from rig_emulator.config.loader import load_config
+from rig_emulator.estimation.load_cell_filter import (FILTER_IIR, LcFilterParams, load_cell_filter_state,
+                                                      load_cell_filter_step)
 
 P = np.array([1.02, 0.98, 1.0, 1.01, -0.3, 1.7, 0.013])  # gains, bias (N), curve exponent, delay (s)
 
 
 def _guard_and_iir(raw, rc):
-    """The firmware's jump guard (with its re-accept count) and IIR, per cell, on raw readings (N)."""
-    x = np.empty_like(raw)
-    last = raw[0].copy()
-    count = np.zeros(raw.shape[1])
+    """The firmware's own guards and IIR (estimation/load_cell_filter.py), sample by sample, on raw
+    readings (N, counted at 1 N a count): the filtered thrusts and which readings a guard rejected."""
+    p = LcFilterParams(mode=FILTER_IIR, zero_counts=np.zeros(4), newton_per_count=np.ones(4),
+                       jump_threshold_N=rc.lc_jump_N, max_thrust_N=rc.lc_max_N, min_thrust_N=-1e9,
+                       reaccept_after=rc.lc_reaccept, iir_alpha=rc.lc_alpha, kalman_gain=np.zeros(2),
+                       dt_s=rc.dt * rc.lc_decim)
+    state = load_cell_filter_state(4)
+    y = np.empty_like(raw)
     held = np.zeros(raw.shape, dtype=bool)
+    out = np.empty(4)
     for j in range(raw.shape[0]):
-        for i in range(raw.shape[1]):
-            if j > 0 and abs(raw[j, i] - last[i]) > rc.lc_jump_N:
-                held[j, i] = True
-                count[i] += 1
-                if count[i] >= rc.lc_reaccept:
-                    last[i] = raw[j, i]
-                    count[i] = 0
-            else:
-                last[i] = raw[j, i]
-                count[i] = 0
-            x[j, i] = last[i]
-    a = rc.lc_alpha
-    return lfilter([a], [1.0, -(1.0 - a)], x, axis=0, zi=(1.0 - a) * x[:1])[0], held
+        rejected = load_cell_filter_step(raw[j], p, state, out)
+        y[j] = out
+        held[j] = [(rejected >> i) & 1 for i in range(4)]
+    return y, held
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +68,7 @@ def test_the_guard_holds_readings_in_the_synthetic_log(swinging_log):
 
 def test_repaired_cells_follow_the_readings_the_guard_would_have_passed(swinging_log):
     rc, model, log, held, unguarded = swinging_log
-    rep = repaired_cells(log, rc, P)
+    rep = repaired_cells(log, model, P)
     assert rep is not None and rep.rows.all() and rep.held_share > 0.0
     guarded_err = np.abs(log.thrust - unguarded)
     repaired_err = np.abs(rep.thrust - unguarded)
@@ -82,7 +80,7 @@ def test_repaired_cells_follow_the_readings_the_guard_would_have_passed(swinging
 
 def test_repaired_noise_leaves_out_the_replaced_readings(swinging_log):
     rc, model, log, held, _ = swinging_log
-    rep = repaired_cells(log, rc, P)
+    rep = repaired_cells(log, model, P)
     f = model.thrust(P, model.voltages(P[6], model.k_lc))
     a = rc.lc_alpha
     v_raw = cell_noise_sd(rc, f) ** 2 + LC_STEP_N ** 2 / 12.0
@@ -98,4 +96,4 @@ def test_no_repair_without_every_sample():
     t = np.arange(0.0, 4.0, 0.02)  # 50 Hz rows: the filter cannot be inverted sample by sample
     v = np.full((t.size, 4), 11.0)
     log = SimpleNamespace(t=t, v_cmd=v, thrust=np.full((t.size, 4), 5.0), t_cmd=t, t_cells=t)
-    assert repaired_cells(log, rc, P) is None
+    assert repaired_cells(log, MotorChainModel(t, v, rc), P) is None

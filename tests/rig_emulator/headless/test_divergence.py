@@ -92,6 +92,7 @@ def test_the_divergence_command_writes_its_table(tmp_path, capsys, monkeypatch):
     rows = [r.strip("|").split("|") for r in table.splitlines()]
     assert [c.strip() for c in rows[0]] == ["scenario", "plant", "max", "rms", "over 1 m from", "at 1 s (N, E, D)",
                                             "at 5 s (N, E, D)"]
+    # both plants: the command compares the hardware rig with the ideal plant unless --airframe says otherwise
     assert [[c.strip() for c in r[:2]] for r in rows[2:]] == [["hover", "hilms"], ["hover", "hilms-ideal"]]
     for r, line in zip(rows[2:], printed):  # the figures the command printed
         assert f"max {float(r[2].split()[0]):6.2f} m" in line
