@@ -2831,7 +2831,7 @@ enums["MAV_CMD"][58102].param[5] = """Empty"""
 enums["MAV_CMD"][58102].param[6] = """Empty"""
 enums["MAV_CMD"][58102].param[7] = """Empty"""
 MAV_CMD_HILMS_SYSID = 58103
-enums["MAV_CMD"][58103] = EnumEntry("MAV_CMD_HILMS_SYSID", """Fly (or abort) the identification flight: the rig's own 90 s programme of attitude chirps, thrust steps and disarmed swings on the joint (docs/how-to/identify.md), run on the rig's clock. It needs the rig armed; the programme disarms and re-arms it for the swings and ends disarmed, hanging on the joint. While it runs, the HEARTBEAT reports PX4's first external mode (AUTO, sub mode 11), named "System ID" in AVAILABLE_MODES; a mode change, a disarm or param1 = 0 stops it. As a mission item it flies when the mission reaches it, in AUTO.MISSION, and ends the mission: no item may follow it.""")
+enums["MAV_CMD"][58103] = EnumEntry("MAV_CMD_HILMS_SYSID", """Fly (or abort) the identification flight: the rig's own 120 s programme of attitude chirps, thrust steps, a hover and disarmed swings on the joint (docs/how-to/identify.md), run on the rig's clock. It needs the rig armed; the programme disarms and re-arms it for the swings and ends disarmed, hanging on the joint. While it runs, the HEARTBEAT reports PX4's first external mode (AUTO, sub mode 11), named "System ID" in AVAILABLE_MODES; a mode change, a disarm or param1 = 0 stops it. As a mission item it flies when the mission reaches it, in AUTO.MISSION, and ends the mission: no item may follow it.""")
 enums["MAV_CMD"][58103].param[1] = """1: start the programme; 0: abort it (the rig holds its position, or stays disarmed). A mission item must say 1."""
 enums["MAV_CMD"][58103].label[1] = """Start"""
 enums["MAV_CMD"][58103].param[2] = """Empty"""

@@ -2,7 +2,7 @@
 
 The programme is the headless scenario ``sysid``'s (:mod:`rig_emulator.guidance.sysid`, one
 definition), run on the rig's own simulated clock from the moment it starts
-(:meth:`~rig_emulator.simulation.live.LiveRig.start_sysid`): 90 s of attitude chirps, thrust steps and
+(:meth:`~rig_emulator.simulation.live.LiveRig.start_sysid`): 120 s of attitude chirps, thrust steps, a hover and
 swings, for which it disarms and re-arms the rig itself; it ends disarmed, hanging on the joint.
 
 * ``MAV_CMD_HILMS_SYSID`` param1 = 1 enters the mode AUTO.SYSID, which starts the programme;

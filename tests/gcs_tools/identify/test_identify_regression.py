@@ -12,7 +12,7 @@ calibration study's (gcs_tools/identify/regression.py, ``INTERVAL_SCALE_*``).
 * every effect: its 95 % interval holds the truth in at least 85 % of the (parameter, draw) pairs, and
   the model check finds each log explained.
 
-Three draws cost about a minute and a half of CPU (three 90 s flights at 20-30x real time, the .tlog
+Three draws cost about a minute and a half of CPU (three 120 s flights at 20-30x real time, the .tlog
 export at 500 Hz, three fits of about 14 s). The calibration study (`rig-gcs identify --calibration-study
 N`) measures the same over more draws; docs/how-to/identify.md has its table.
 """

@@ -9,7 +9,7 @@ import pytest
 
 from rig_emulator.config.loader import load_config
 from rig_emulator.guidance.offboard import OFB_ATT, OFB_THRUST
-from rig_emulator.guidance.sysid import UPDATE_S, setpoint
+from rig_emulator.guidance.sysid import DURATION_S, HOLD_THRUST_MAX, HOLD_TILT_MAX, UPDATE_S, setpoint
 from rig_emulator.link.serve import prepare_rig
 from rig_emulator.simulation.live import LiveRig
 
@@ -35,19 +35,28 @@ def test_the_programme_flies_on_its_own_clock_from_where_it_starts(cfg):
     t0 = rig.time_s
     rig.start_sysid()
     hover = rig.sim.pp.mass * rig.sim.pp.g
-    for t_prog in (5.0, 20.0, 47.3, 58.0, 60.0):  # roll chirp, pitch chirp, a thrust step, the roll swing
+    prog = rig.sim.programme
+    # roll chirp, pitch chirp, a thrust step, the hover, the roll swing armed and disarmed
+    for t_prog in (5.0, 20.0, 47.3, 70.0, 87.0, 90.0):
         _run(rig, t0 + t_prog - rig.time_s)
         st = rig.sysid_status()
         assert st.elapsed_s == pytest.approx(t_prog, abs=1e-9) and st.stopped is None and not st.done
-        # the set-point applied last: at the last update instant before now (the one at now comes with the next step)
+        # the set-point applied last: at the last update instant before now (the one at now comes with the next
+        # step), plus the position hold's correction, small and, in the thrust steps, leaving the collective alone
         t_update = (math.ceil(st.elapsed_s / UPDATE_S - 1e-6) - 1) * UPDATE_S
         armed, att, _rate, thrust = setpoint(t_update)
         assert rig.armed == armed, t_prog
+        dphi, dtheta, dthrust = prog.hold
+        assert math.hypot(dphi, dtheta) <= HOLD_TILT_MAX + 1e-12 and abs(dthrust) <= HOLD_THRUST_MAX
+        if not armed:
+            assert (dphi, dtheta, dthrust) == (0.0, 0.0, 0.0)
+        if t_prog == 47.3:
+            assert dthrust == 0.0
         ofb = rig.sim.gp.offboard
-        np.testing.assert_allclose(ofb[OFB_ATT:OFB_ATT + 3], att, atol=1e-12)
-        assert ofb[OFB_THRUST] == pytest.approx(thrust * hover)
+        np.testing.assert_allclose(ofb[OFB_ATT:OFB_ATT + 3], [att[0] + dphi, att[1] + dtheta, att[2]], atol=1e-12)
+        assert ofb[OFB_THRUST] == pytest.approx((thrust + dthrust) * hover)
     assert not rig.armed and rig.sysid_status().part == "roll swing"  # disarmed: swinging on the joint
-    _run(rig, t0 + 90.0 - rig.time_s)
+    _run(rig, t0 + DURATION_S - rig.time_s)
     st = rig.sysid_status()
     assert st.done and st.part == "after the programme" and not rig.armed
     rig.stop_sysid()
@@ -60,7 +69,7 @@ def test_a_disarm_or_another_guidance_stops_it_for_good(cfg):
     rig.start_sysid()
     _run(rig, 4.0)
     rig.arm(False)  # e.g. a terminate action, or the failsafe inside the loop
-    _run(rig, 60.0)  # past the swings, where the programme would arm the rig again
+    _run(rig, DURATION_S - 3.0)  # past the swings, where the programme would arm the rig again
     assert "disarmed by something else" in rig.sysid_status().stopped
     assert not rig.armed
 
@@ -73,7 +82,7 @@ def test_a_disarm_or_another_guidance_stops_it_for_good(cfg):
     st = rig.sysid_status()
     assert st.stopped == "another guidance took over" and st.replaced
     assert rig.sim.gp.offboard is not None and rig.armed
-    _run(rig, 60.0)
+    _run(rig, DURATION_S - 20.0)
     assert rig.armed  # the programme never disarmed it for its swings
 
 

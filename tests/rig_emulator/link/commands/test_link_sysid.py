@@ -3,7 +3,7 @@
 records its own .tlog, arms, starts the flight and waits for its end in simulated time, and `rig-gcs identify`
 recovers the rig's centre of gravity from that log; the refusals, the stops and the mission item.
 
-The 90 s programme is flown once for the module (a rig process at 20x real time, about 6 s of wall time);
+The 120 s programme is flown once for the module (a rig process at 20x real time, about 8 s of wall time);
 `--chunk-ms 1.25` gives it the 5 ms chunks a rig serving in real time runs, so the streams run at the 100 Hz
 the headless export writes (at 20x the default chunk is 20 ms: 50 Hz at most)."""
 
@@ -19,7 +19,7 @@ from gcs_tools.identify.sysid_log import read_sysid_log
 from protocol.dialect import mavlink as M
 from protocol.mission_items import MissionItem
 from rig_emulator.config.loader import load_config
-from rig_emulator.guidance.sysid import PARTS
+from rig_emulator.guidance.sysid import DURATION_S, PARTS
 from rig_emulator.link.commands import modes as MD
 from rig_emulator.link.endpoints.channel import Channel
 from rig_emulator.link.serve import prepare_rig
@@ -111,13 +111,14 @@ def flown(tmp_path_factory):
 
 def test_the_flight_runs_its_parts_in_the_sysid_mode_and_ends_disarmed(flown):
     texts = flown["texts"]
-    assert texts[0] == "sysid: identification flight started (90 s)" and texts[-1] == "sysid: done (90 s), disarmed"
+    assert texts[0] == f"sysid: identification flight started ({DURATION_S:g} s)"
+    assert texts[-1] == f"sysid: done ({DURATION_S:g} s), disarmed"
     announced = [t for t in texts if t.startswith(tuple(f"sysid: {name} (" for name, _, _ in PARTS))]
     assert announced == [f"sysid: {name} ({a:g}-{b:g} s)" for name, a, b in PARTS]
     # the stale set-point and the one streamed meanwhile were never flown, their loss never acted on
     assert not [t for t in texts if "offboard" in t or "stopped" in t], texts
-    # 90 s of simulated time from the start to the end (ATTITUDE stamps of 10 ms rows)
-    assert flown["t_done"] - flown["t_start"] == pytest.approx(90.0, abs=0.05)
+    # the programme's length in simulated time from the start to the end (ATTITUDE stamps of 10 ms rows)
+    assert flown["t_done"] - flown["t_start"] == pytest.approx(DURATION_S, abs=0.05)
     assert flown["beats"] and all(mode == SYSID_MODE for mode, _ in flown["beats"])
     assert flown["after"].custom_mode == LOITER and not flown["after"].base_mode & ARMED  # hanging, disarmed
 
@@ -126,10 +127,13 @@ def test_the_ground_stations_log_identifies_the_rig(flown):
     log = read_sysid_log(flown["tlog"], load_config("hilms")["motors.voltage_max"])
     assert log.dt == pytest.approx(0.01)  # rows at 100 Hz: the three messages of each row share their stamp
     t = log.t - flown["t_start"]  # the programme's time, within a row
-    assert ((t >= 0.0) & (t <= 90.0)).sum() >= 0.99 * 90.0 / 0.01
-    # it disarmed and re-armed itself: motors at 0 V in the swings' disarmed stretches only
-    for a, b, armed in ((0.2, 58.3, True), (58.7, 65.8, False), (67.2, 69.3, True), (69.7, 76.8, False),
-                        (78.2, 82.8, True), (83.2, 89.8, False)):
+    assert ((t >= 0.0) & (t <= DURATION_S)).sum() >= 0.99 * DURATION_S / 0.01
+    # it disarmed and re-armed itself: motors at 0 V in the swings' disarmed stretches only (each swing holds
+    # its tilt armed for 3.5 s, the yaw swing for 6 s, then disarms)
+    start = {name: a for name, a, _ in PARTS}
+    r, p, y = start["roll swing"], start["pitch swing"], start["yaw swing"]
+    for a, b, armed in ((0.2, r + 3.3, True), (r + 3.7, p - 0.2, False), (p + 1.2, p + 3.3, True),
+                        (p + 3.7, y - 0.2, False), (y + 1.2, y + 5.8, True), (y + 6.2, DURATION_S - 0.2, False)):
         rows = (t >= a) & (t <= b)
         assert rows.sum() > 100 and np.all(log.armed[rows] == armed), (a, b)
     est = flown["estimates"]
@@ -207,7 +211,7 @@ def test_a_mode_change_an_abort_and_a_disarm_stop_it(rig, client):
     # entered as a mode (DO_SET_MODE), aborted with param1 = 0: the rig holds, armed
     result, texts = _command_texts(client, M.MAV_CMD_DO_SET_MODE, M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, MD.AUTO,
                                    MD.AUTO_SYSID)
-    assert result == ACCEPTED and "sysid: identification flight started (90 s)" in texts, texts
+    assert result == ACCEPTED and f"sysid: identification flight started ({DURATION_S:g} s)" in texts, texts
     result, texts = _command_texts(client, M.MAV_CMD_HILMS_SYSID, 0)
     assert result == ACCEPTED and _stopped(texts, ": aborted by command"), texts
     assert _mode_beat(client, LOITER).base_mode & ARMED
@@ -225,7 +229,7 @@ def test_the_mission_reaches_the_item_and_flies_the_programme(rig, client):
     assert command(client, M.MAV_CMD_COMPONENT_ARM_DISARM, 1).result == ACCEPTED
     assert command(client, M.MAV_CMD_MISSION_START, 0, 0).result == ACCEPTED
     # the delay (held 1 s where the rig is), then the item: the programme starts in AUTO.MISSION
-    assert recv_text(client, lambda t: t == "sysid: identification flight started by mission item 1 (90 s)") is not None
+    assert recv_text(client, lambda t: t == f"sysid: identification flight started by mission item 1 ({DURATION_S:g} s)") is not None
     cur = recv(client, "MISSION_CURRENT", 10, lambda m: m.seq == 1)
     assert cur.mission_state == M.MISSION_STATE_ACTIVE
     assert recv_text(client, lambda t: t == "sysid: roll chirp (3-17 s)", timeout=20) is not None
@@ -260,20 +264,21 @@ def test_commands_that_need_the_rig_still_are_refused_during_a_disarmed_swing():
             server.step_chunk()
         assert ack(M.MAV_CMD_COMPONENT_ARM_DISARM, 1)[0] == ACCEPTED
         assert ack(M.MAV_CMD_HILMS_SYSID, 1)[0] == ACCEPTED
-        while server.rig.sysid_status().elapsed_s < 60.0:  # the roll swing: disarmed since 58.5 s
+        swing = next(a for name, a, _ in PARTS if name == "roll swing") + 5.0  # disarmed since 3.5 s into it
+        while server.rig.sysid_status().elapsed_s < swing:
             server.step_chunk()
         assert not server.rig.armed and server.sysid_flight.running
         for cmd, params, what in ((M.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot"),
                                   (M.MAV_CMD_DO_MOTOR_TEST, (1, 0, 10, 1), "motor test"),
                                   (M.MAV_CMD_PREFLIGHT_CALIBRATION, (1,), "calibration")):
             result, texts = ack(cmd, *params)
-            assert result == DENIED and f"{what} refused: the identification flight is running (60.0 s, roll swing)" \
-                in texts, (what, texts)
+            assert result == DENIED and f"{what} refused: the identification flight is running ({swing:.1f} s, " \
+                "roll swing)" in texts, (what, texts)
         result, texts = ack(M.MAV_CMD_COMPONENT_ARM_DISARM, 0)
         assert result == ACCEPTED and "disarmed by command" in texts and not server.sysid_flight.running
         assert (server.modes.main, server.modes.sub) == (MD.AUTO, MD.AUTO_LOITER)
         assert ack(M.MAV_CMD_DO_MOTOR_TEST, 2, 0, 10, 1)[0] == ACCEPTED  # the bench is the user's again
-        for _ in range(1400):  # past the swing's end at 66 s: the programme never arms it again
+        for _ in range(1400):  # 7 s: past the swing's end, where the programme would arm it again: it never does
             server.step_chunk()
         assert not server.rig.armed
     finally:
