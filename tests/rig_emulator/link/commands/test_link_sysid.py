@@ -283,3 +283,43 @@ def test_commands_that_need_the_rig_still_are_refused_during_a_disarmed_swing():
         assert not server.rig.armed
     finally:
         server.close()
+
+
+def test_a_rig_unlike_the_preset_flies_the_whole_programme_inside_the_fence():
+    """Served with the default geofence (100 m, 50 m up, action hold), a rig whose motors are 3 % stronger than
+    the preset's and whose centre of gravity is 11 mm off axis (it hangs 16 deg tilted: armable) flies the
+    programme to its end: the position hold keeps the virtual position inside the fence. Open loop it climbed
+    through the 50 m ceiling 25 s in, and the fence's hold stopped the programme. Chunk by chunk, as the test
+    above."""
+    cfg = load_config(overrides={"motors.thrust_gain": [1.05, 0.95, 1.05, 1.05], "motors.thrust_bias_grf": -14.0,
+                                 "joint.cog_offset": [-0.010, -0.005, 0.04]})
+    assert cfg["fence.enabled"] and cfg["fence.action"] == "hold"
+    server = RigServer(prepare_rig(cfg), [], speedup=1.0)
+    try:
+        channel = Channel(NullEndpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
+                          StreamSchedule(default_rates(), server.chunk_s))
+        sent = []
+        channel.send = sent.append
+        server.channels[("test", 0)] = channel
+
+        def command_long(cmd, *params):
+            p = list(params) + [0.0] * (7 - len(params))
+            server.handle(M.MAVLink_command_long_message(server.sysid, 1, cmd, 0, *p), channel)
+
+        for _ in range(20):
+            server.step_chunk()
+        command_long(M.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+        command_long(M.MAV_CMD_HILMS_SYSID, 1)
+        assert server.sysid_flight.running, [_text(m) for m in sent if m.get_type() == "STATUSTEXT"]
+        farthest, texts = 0.0, []
+        while server.sysid_flight.running:
+            server.step_chunk()
+            x, y, _ = server.rig.sim.sensing.state.onboard[0:3]
+            farthest = max(farthest, math.hypot(x, y))
+            texts += [_text(m) for m in sent if m.get_type() == "STATUSTEXT"]
+            sent.clear()
+        assert f"sysid: done ({DURATION_S:g} s), disarmed" in texts, "\n".join(texts)
+        assert not [t for t in texts if "fence" in t or "stopped" in t], texts
+        assert farthest < 0.5 * cfg["fence.radius"]
+    finally:
+        server.close()
