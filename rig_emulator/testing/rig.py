@@ -469,3 +469,20 @@ class NullEndpoint:
 
     def flush(self) -> None:
         pass
+
+
+def capture_channel(server):
+    """Attach a peer to ``server`` (a :class:`NullEndpoint` channel at the default stream rates) that keeps
+    every message the rig sends it: (the channel, the list of those messages in order). A test hands
+    messages to ``server.handle(msg, channel)``, steps chunks on the server itself and reads what a ground
+    station would have received."""
+    from rig_emulator.link.endpoints.channel import Channel
+    from rig_emulator.link.telemetry.stream_table import default_rates
+    from rig_emulator.link.telemetry.streams import StreamSchedule
+
+    channel = Channel(NullEndpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
+                      StreamSchedule(default_rates(), server.chunk_s))
+    sent: list = []
+    channel.send = sent.append
+    server.channels[("test", 0)] = channel
+    return channel, sent

@@ -5,22 +5,15 @@ stepped between the two: seen under stress-ng in tests/rig_emulator/link/command
 
 from protocol.dialect import mavlink as M
 from rig_emulator.config.loader import load_config
-from rig_emulator.link.endpoints.channel import Channel
 from rig_emulator.link.serve import prepare_rig
 from rig_emulator.link.server import RigServer
-from rig_emulator.link.telemetry.stream_table import default_rates
-from rig_emulator.link.telemetry.streams import StreamSchedule
-from rig_emulator.testing.rig import NullEndpoint
+from rig_emulator.testing.rig import capture_channel
 
 
 def test_a_command_right_after_arming_sees_the_rig_armed():
     server = RigServer(prepare_rig(load_config()), [], speedup=1.0)
     try:
-        channel = Channel(NullEndpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
-                          StreamSchedule(default_rates(), server.chunk_s))
-        sent = []
-        channel.send = sent.append
-        server.channels[("test", 0)] = channel
+        channel, sent = capture_channel(server)
         for _ in range(20):  # the estimate settles, as a served rig's does before anyone arms it
             server.step_chunk()
 

@@ -21,12 +21,9 @@ from protocol.mission_items import MissionItem
 from rig_emulator.config.loader import load_config
 from rig_emulator.guidance.sysid import DURATION_S, PARTS
 from rig_emulator.link.commands import modes as MD
-from rig_emulator.link.endpoints.channel import Channel
 from rig_emulator.link.serve import prepare_rig
 from rig_emulator.link.server import RigServer
-from rig_emulator.link.telemetry.stream_table import default_rates
-from rig_emulator.link.telemetry.streams import StreamSchedule
-from rig_emulator.testing.rig import (NAN, MissionClient, NullEndpoint, RigProcess, command, connect, recv,
+from rig_emulator.testing.rig import (NAN, MissionClient, RigProcess, capture_channel, command, connect, recv,
                                       recv_text, stamp_s)
 
 ACCEPTED, DENIED = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED
@@ -242,23 +239,25 @@ def test_the_mission_reaches_the_item_and_flies_the_programme(rig, client):
     assert paused.seq == 1
 
 
+def _ack(server, channel, sent, cmd, *params):
+    """COMMAND_LONG ``cmd`` handed to ``server`` from ``channel``: (its COMMAND_ACK's result, the STATUSTEXTs
+    that came with it, chunks joined)."""
+    sent.clear()
+    p = list(params) + [0.0] * (7 - len(params))
+    server.handle(M.MAVLink_command_long_message(server.sysid, 1, cmd, 0, *p), channel)
+    texts = "".join(_text(m) for m in sent if m.get_type() == "STATUSTEXT")
+    return next(m.result for m in sent if m.get_type() == "COMMAND_ACK"), texts
+
+
 def test_commands_that_need_the_rig_still_are_refused_during_a_disarmed_swing():
     """Chunk by chunk (the messages handled as a socket delivers them): in the roll swing the rig is disarmed,
     yet a reboot, a motor test or a calibration is refused while the programme runs; a disarm command stops it."""
     server = RigServer(prepare_rig(load_config()), [], speedup=1.0)
     try:
-        channel = Channel(NullEndpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
-                          StreamSchedule(default_rates(), server.chunk_s))
-        sent = []
-        channel.send = sent.append
-        server.channels[("test", 0)] = channel
+        channel, sent = capture_channel(server)
 
         def ack(cmd, *params):
-            sent.clear()
-            p = list(params) + [0.0] * (7 - len(params))
-            server.handle(M.MAVLink_command_long_message(server.sysid, 1, cmd, 0, *p), channel)
-            texts = "".join(_text(m) for m in sent if m.get_type() == "STATUSTEXT")  # chunks joined
-            return next(m.result for m in sent if m.get_type() == "COMMAND_ACK"), texts
+            return _ack(server, channel, sent, cmd, *params)
 
         for _ in range(20):
             server.step_chunk()
@@ -296,21 +295,12 @@ def test_a_rig_unlike_the_preset_flies_the_whole_programme_inside_the_fence():
     assert cfg["fence.enabled"] and cfg["fence.action"] == "hold"
     server = RigServer(prepare_rig(cfg), [], speedup=1.0)
     try:
-        channel = Channel(NullEndpoint(), ("127.0.0.1", 14550), server.sysid, 1, server.counters,
-                          StreamSchedule(default_rates(), server.chunk_s))
-        sent = []
-        channel.send = sent.append
-        server.channels[("test", 0)] = channel
-
-        def command_long(cmd, *params):
-            p = list(params) + [0.0] * (7 - len(params))
-            server.handle(M.MAVLink_command_long_message(server.sysid, 1, cmd, 0, *p), channel)
-
+        channel, sent = capture_channel(server)
         for _ in range(20):
             server.step_chunk()
-        command_long(M.MAV_CMD_COMPONENT_ARM_DISARM, 1)
-        command_long(M.MAV_CMD_HILMS_SYSID, 1)
-        assert server.sysid_flight.running, [_text(m) for m in sent if m.get_type() == "STATUSTEXT"]
+        for cmd in (M.MAV_CMD_COMPONENT_ARM_DISARM, M.MAV_CMD_HILMS_SYSID):
+            result, texts = _ack(server, channel, sent, cmd, 1)
+            assert result == ACCEPTED, texts
         farthest, texts = 0.0, []
         while server.sysid_flight.running:
             server.step_chunk()
