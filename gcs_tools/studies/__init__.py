@@ -14,4 +14,8 @@ STUDIES = {
     "paper-numbers": ("paper_numbers",
                       "the paper's 18 numbers at one setting (point) or over a scan of one (rate share, delay, yaw)"),
     "faults": ("faults", "how the rig degrades under each fault: estimation error, tracking error, failsafe"),
+    "px4-reposition": ("px4_reposition", "PX4 SITL flying the rig: hover and 5 m repositions per airframe "
+                                         "(needs a PX4 build)"),
+    "ardupilot-move": ("ardupilot_move", "ArduCopter SITL flying the rig: hover and a 5 m move per parameter "
+                                         "variant (needs an ArduPilot build)"),
 }
