@@ -15,7 +15,8 @@ Usage (scripts/docs.sh runs it)::
 
 The expensive pages are written from a run's output, each saying the command and the machine:
 ``--benchmarks FILE.json``, ``--reproduce DIR``, ``--compare DIR`` (``rig-gcs reproduce --controller``),
-``--held-out FILE.json`` (``rig-gcs identify --paper --held-out``), ``--identify-study FILE.json``,
+``--held-out FILE.json`` (``rig-gcs identify --paper --held-out``), ``--refit FILE.json``
+(``rig-gcs identify --paper --json``), ``--identify-study FILE.json``,
 ``--stability``; the studies write theirs themselves (``python -m gcs_tools.studies NAME --markdown FILE``).
 """
 
@@ -404,6 +405,39 @@ def held_out_page(path: Path, wall_s: float | None, machine: str) -> str:
             f"({doc['evaluated_points']} evaluated points).{took}\n\n" + markdown(doc, doc.get("command")) + "\n")
 
 
+# --- the paper fit's refit with the priors (expensive: written from `rig-gcs identify --paper --json` files) --
+
+def refit_page(path: Path, machine: str) -> str:
+    """docs/generated/paper-refit.md from the ``--json FILE`` of a ``rig-gcs identify --paper`` fit: each
+    fitted key's start (the shipped value the fit starts from) and its fitted value with the fit's sigma."""
+    import re as _re
+
+    from rig_emulator.config.schema import SCHEMA
+
+    doc = json.loads(Path(path).read_text())
+
+    def unit_of(key: str) -> str:
+        spec = SCHEMA.get(_re.sub(r"\[.*\]$", "", key))
+        return spec.unit if spec is not None else ""
+
+    def fmt(v, unit: str, sigma=None) -> str:
+        scale, unit = (1e3, "ms") if unit == "s" else (1.0, unit)
+        text = f"{v * scale:.3g}" + ("" if sigma is None else f" +- {sigma * scale:.2g}")
+        return text + (f" {unit}" if unit else "")
+
+    rows = ["| key | shipped (the fit's start) | refit | prior |", "|---|---|---|---|"]
+    for p in doc["params"]:
+        u = unit_of(p["key"])
+        prior = "-" if not p.get("prior") else fmt(p["prior"][0], u, p["prior"][1])
+        bound = " (at a bound)" if p.get("at_bound") else ""
+        rows.append(f"| `{p['key']}` | {fmt(p['start'], u)} | {fmt(p['value'], u, p.get('sigma'))}{bound} | {prior} |")
+    took = (f"{doc['evaluations']} points, {doc['runs']} headless runs, {doc['wall_s']:.0f} s wall"
+            + (f" on {machine}" if machine else ""))
+    return (f"Written by `python scripts/docs_gen.py --refit FILE.json` from the `--json` file of `{doc['command']}` "
+            f"({took}; fit status: {doc['status']}). Sigma is the fit's one-sigma uncertainty from its Jacobian.\n\n"
+            + "\n".join(rows) + "\n")
+
+
 # --- the stability analysis (cheap, but its solver's last digits vary by machine: written, not checked) --
 
 def stability_page() -> str:
@@ -456,6 +490,8 @@ def main(argv=None) -> int:
     ap.add_argument("--held-out", metavar="FILE.json", help="also write docs/generated/held-out-NAME.md from the "
                                                              "-o file of `rig-gcs identify --paper --held-out ...`")
     ap.add_argument("--held-out-name", default="logo", help="NAME of --held-out's page: %(default)s")
+    ap.add_argument("--refit", metavar="FILE.json", help="also write docs/generated/paper-refit.md from the --json "
+                                                         "file of a `rig-gcs identify --paper ...` fit")
     ap.add_argument("--held-out-wall", type=float, metavar="S", help="the wall time --held-out's command took (s)")
     ap.add_argument("--stability", action="store_true",
                     help="also write docs/generated/stability.md (rig-gcs stability; needs the analysis extra)")
@@ -471,6 +507,11 @@ def main(argv=None) -> int:
         path = OUT / "reproduce-summary.md"
         timing = Path(args.reproduce_timing) if args.reproduce_timing else None
         path.write_text(reproduce_page(Path(args.reproduce), args.reproduce_command, timing))
+        print(f"docs_gen: wrote {path.relative_to(ROOT)}")
+        return 0
+    if args.refit:
+        path = OUT / "paper-refit.md"
+        path.write_text(refit_page(Path(args.refit), args.machine))
         print(f"docs_gen: wrote {path.relative_to(ROOT)}")
         return 0
     if args.held_out:
