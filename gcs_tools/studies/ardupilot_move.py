@@ -38,7 +38,7 @@ import time
 from pathlib import Path
 
 from gcs_tools.studies.page import Page
-from gcs_tools.studies.sitl import free_port, span, start_rig, stop, tilt_deg
+from gcs_tools.studies.sitl import StackLink, chosen, free_port, git_commit, span, start_rig, stop, tilt_deg
 
 #: the fitted thrust curve (docs/how-to/flight-stacks.md, "ArduCopter's thrust curve fitted to the rig")
 FITTED = {"MOT_SPIN_MIN": 0.19, "MOT_SPIN_MAX": 1.0, "MOT_THST_EXPO": 0.5, "MOT_BAT_VOLT_MAX": 0.0}
@@ -71,8 +71,10 @@ def variant_parm(shipped: str, variant: str, extra: dict[str, float] | None = No
     return "\n".join(lines) + "\n"
 
 
-class Flight:
+class Flight(StackLink):
     """ArduCopter's link and the rig's ground link, read in one loop."""
+
+    ack_wait_s = 2.0
 
     def __init__(self, ap_url: str, rig_url: str):
         from pymavlink import mavutil
@@ -87,6 +89,7 @@ class Flight:
                 if time.monotonic() > deadline:
                     raise
                 time.sleep(1.0)
+        self.link = self.ap
         self.rig = mavutil.mavlink_connection(rig_url, source_system=254)
         self.t = 0.0  # ArduCopter's time (s)
         self.att = self.lpos = self.rig_state = None
@@ -124,28 +127,6 @@ class Flight:
                              r.pitch if r else math.nan))
         return msg
 
-    def wait(self, seconds: float, rows: list | None = None, until=None, wall_limit: float = 900.0) -> bool:
-        """Pump for ``seconds`` of ArduCopter's time (or until ``until()``); False on the wall-clock limit."""
-        t0, w0 = self.t, time.monotonic()
-        while self.t - t0 < seconds:
-            self.pump(rows)
-            if until is not None and until():
-                return True
-            if time.monotonic() - w0 > wall_limit:
-                return False
-        return until is None
-
-    def command(self, command: int, *p: float, tries: int = 10):
-        p = list(p) + [0.0] * (7 - len(p))
-        for _ in range(tries):
-            self.acks.pop(command, None)
-            self.ap.mav.command_long_send(self.ap.target_system, self.ap.target_component, command, 0, *p)
-            w0 = time.monotonic()
-            while time.monotonic() - w0 < 2.0:
-                self.pump()
-                if command in self.acks:
-                    return self.acks[command]
-        return None
 
 
 def _say(text: str) -> None:
@@ -156,6 +137,7 @@ def fly(f: Flight) -> dict:
     """EKF on GPS, GUIDED, arm, take off, hover, the 5 m move, land: the session's figures."""
     M = f.M
     f.ap.wait_heartbeat(timeout=120)
+    f.target = (f.ap.target_system, f.ap.target_component)
     _say("heartbeat")
     # ArduCopter's own clock comes with GLOBAL_POSITION_INT: ask for it (and the rest) at 20 Hz first
     f.ap.mav.request_data_stream_send(f.ap.target_system, f.ap.target_component, M.MAV_DATA_STREAM_ALL, 10, 1)
@@ -324,10 +306,7 @@ def _extra(items: list[str]) -> dict[str, float]:
 def main(argv=None) -> None:
     a = parser().parse_args(sys.argv[1:] if argv is None else argv)
     ardupilot = Path(a.ardupilot).expanduser().resolve()
-    names = [n.strip() for n in a.variants.split(",") if n.strip()]
-    bad = [n for n in names if n not in VARIANTS]
-    if bad or not names:
-        parser().error(f"--variants: {', '.join(bad) or 'none given'}: must be of {', '.join(VARIANTS)}")
+    names = chosen(a.variants, VARIANTS, "--variants", parser().error)
     if a.sessions < 1:
         parser().error("--sessions: must be at least 1")
     if not (a.speedup > 0):
@@ -340,8 +319,7 @@ def main(argv=None) -> None:
     if not binary.is_file():
         parser().error(f"--ardupilot: {binary} does not exist: build ArduCopter SITL first "
                        "(docs/how-to/flight-stacks.md)")
-    commit = subprocess.run(["git", "-C", str(ardupilot), "rev-parse", "--short=9", "HEAD"], capture_output=True,
-                            text=True).stdout.strip() or "unknown"
+    commit = git_commit(ardupilot)
     out = Page(a.markdown, f"ArduCopter SITL (commit {commit}, `--speedup {a.speedup:g}`) flying the default rig "
                            f"`hilms` in lockstep: each figure the range over {a.sessions} session(s) per variant "
                            "(a fresh rig and ArduCopter each); ArduCopter's figures, the rig's SIM_STATE in brackets.")

@@ -39,7 +39,7 @@ import time
 from pathlib import Path
 
 from gcs_tools.studies.page import Page
-from gcs_tools.studies.sitl import free_port, span, start_rig, stop, tilt_deg, wrap
+from gcs_tools.studies.sitl import StackLink, chosen, free_port, git_commit, span, start_rig, stop, tilt_deg, wrap
 
 NAN = float("nan")
 #: the shipped airframe, PX4's name for it, and the geometry-only variant written beside it
@@ -85,14 +85,17 @@ def install_airframes(build: Path) -> None:
 
 
 
-class Flight:
+class Flight(StackLink):
     """PX4's offboard link and the rig's ground link, read in one loop; times are simulated."""
+
+    target = (1, 1)
 
     def __init__(self, px4_url: str, rig_url: str):
         from pymavlink import mavutil
 
         self.M = mavutil.mavlink
         self.px4 = mavutil.mavlink_connection(px4_url, source_system=255, source_component=190)
+        self.link = self.px4
         self.rig = mavutil.mavlink_connection(rig_url, source_system=254, source_component=190)
         self.lpos: list[tuple] = []  # PX4: (t, x, y, z) NED
         self.att: list[tuple] = []  # PX4: (t, roll, pitch, yaw)
@@ -103,7 +106,7 @@ class Flight:
         self.armed = False
         self.acks: dict = {}
 
-    def pump(self, timeout: float = 0.05) -> None:
+    def pump(self, rows: list | None = None, timeout: float = 0.05) -> None:
         m = self.px4.recv_match(blocking=True, timeout=timeout)
         while m is not None:
             self._px4(m)
@@ -135,29 +138,6 @@ class Flight:
             self.armed = bool(m.base_mode & self.M.MAV_MODE_FLAG_SAFETY_ARMED)
         elif ty == "COMMAND_ACK":
             self.acks[m.command] = m.result
-
-    def wait(self, seconds: float, until=None, wall_limit: float = 600.0) -> bool:
-        """Pump for ``seconds`` of PX4's time (or until ``until()``); False on the wall-clock limit."""
-        t0, w0 = self.t, time.monotonic()
-        while self.t - t0 < seconds:
-            self.pump()
-            if until is not None and until():
-                return True
-            if time.monotonic() - w0 > wall_limit:
-                return False
-        return until is None
-
-    def command(self, command: int, *p: float, tries: int = 10):
-        p = list(p) + [0.0] * (7 - len(p))
-        for _ in range(tries):
-            self.acks.pop(command, None)
-            self.px4.mav.command_long_send(1, 1, command, 0, *p)
-            w0 = time.monotonic()
-            while time.monotonic() - w0 < 1.0:
-                self.pump()
-                if command in self.acks:
-                    return self.acks[command]
-        return None
 
     def reposition(self, lat: float, lon: float):
         M = self.M
@@ -228,7 +208,7 @@ def fly(flight: Flight) -> dict:
             st["rig_tilt_deg"] = max(tilt_deg(r, p) for (_, _, r, p) in rig)
         result["repositions"].append(st)
     flight.command(M.MAV_CMD_NAV_LAND, 0, 0, 0, NAN, NAN, NAN, NAN)
-    result["landed"] = flight.wait(60.0, lambda: not flight.armed)
+    result["landed"] = flight.wait(60.0, until=lambda: not flight.armed)
     return result
 
 
@@ -294,18 +274,14 @@ def parser() -> argparse.ArgumentParser:
 def main(argv=None) -> None:
     a = parser().parse_args(sys.argv[1:] if argv is None else argv)
     px4 = Path(a.px4).expanduser().resolve()
-    names = [n.strip() for n in a.airframes.split(",") if n.strip()]
-    bad = [n for n in names if n not in AIRFRAMES]
-    if bad or not names:
-        parser().error(f"--airframes: {', '.join(bad) or 'none given'}: must be of {', '.join(AIRFRAMES)}")
+    names = chosen(a.airframes, AIRFRAMES, "--airframes", parser().error)
     if a.sessions < 1:
         parser().error("--sessions: must be at least 1")
     binary = px4 / "build" / "px4_sitl_default" / "bin" / "px4"
     if not binary.is_file():
         parser().error(f"--px4: {binary} does not exist: build PX4 SITL first (docs/how-to/flight-stacks.md)")
     install_airframes(px4 / "build" / "px4_sitl_default")
-    commit = subprocess.run(["git", "-C", str(px4), "rev-parse", "--short=9", "HEAD"], capture_output=True,
-                            text=True).stdout.strip() or "unknown"
+    commit = git_commit(px4)
     out = Page(a.markdown, f"PX4 SITL (commit {commit}) flying the default rig `hilms` in lockstep: each figure "
                            f"the range over {a.sessions} session(s) per airframe (a fresh rig and PX4 each) of "
                            f"{len(TARGETS)} repositions each.")

@@ -10,6 +10,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 
 
 def free_port() -> int:
@@ -70,3 +71,55 @@ def span(values: list[float], digits: int) -> str:
     if lo == hi:
         return lo
     return f"{lo} to {hi}" if lo.startswith("-") else f"{lo}-{hi}"
+
+
+def chosen(text: str, known, option: str, error) -> list[str]:
+    """The comma-separated names of ``text``, each one of ``known``; ``error(message)`` (a parser's)
+    names ``option`` and the unknown ones otherwise."""
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    bad = [n for n in names if n not in known]
+    if bad or not names:
+        error(f"{option}: {', '.join(bad) or 'none given'}: must be of {', '.join(known)}")
+    return names
+
+
+def git_commit(tree) -> str:
+    """The short commit a source tree (a flight stack's) is checked out at, or "unknown"."""
+    done = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short=9", "HEAD"], capture_output=True, text=True)
+    return done.stdout.strip() or "unknown"
+
+
+class StackLink:
+    """A flight stack's MAVLink link, timed in the flight stack's own (simulated) clock.
+
+    A subclass sets ``link`` (its pymavlink connection), ``target`` (system, component), keeps ``t``
+    (the stack's time, s) and ``acks`` (command -> result) up to date in ``pump(rows)``."""
+
+    ack_wait_s = 1.0  # wall time to wait for each COMMAND_ACK before sending again
+
+    def pump(self, rows: list | None = None):
+        raise NotImplementedError
+
+    def wait(self, seconds: float, rows: list | None = None, until=None, wall_limit: float = 900.0) -> bool:
+        """Pump for ``seconds`` of the stack's time (or until ``until()``); False on the wall-clock limit."""
+        t0, w0 = self.t, time.monotonic()
+        while self.t - t0 < seconds:
+            self.pump(rows)
+            if until is not None and until():
+                return True
+            if time.monotonic() - w0 > wall_limit:
+                return False
+        return until is None
+
+    def command(self, command: int, *p: float, tries: int = 10):
+        """COMMAND_LONG ``command`` with params ``p``, sent until acknowledged: the result (None: never)."""
+        p = list(p) + [0.0] * (7 - len(p))
+        for _ in range(tries):
+            self.acks.pop(command, None)
+            self.link.mav.command_long_send(*self.target, command, 0, *p)
+            w0 = time.monotonic()
+            while time.monotonic() - w0 < self.ack_wait_s:
+                self.pump()
+                if command in self.acks:
+                    return self.acks[command]
+        return None
