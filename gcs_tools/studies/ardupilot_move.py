@@ -325,7 +325,7 @@ def main(argv=None) -> None:
                            "(a fresh rig and ArduCopter each); ArduCopter's figures, the rig's SIM_STATE in brackets.")
     for n in names:
         out.print(f"* `{n}`: {describe(n, extra)}")
-    out.print("")
+    out.blank()
     out.print(f"| variant | {' | '.join(COLUMNS)} |")
     out.print("|---|" + "---|" * len(COLUMNS))
     for n in names:

@@ -77,6 +77,11 @@ class Page:
         if md:
             self.lines.append(md)
 
+    def blank(self) -> None:
+        """An empty line, on the terminal and on the page (markdown needs one between a list and a table)."""
+        print(flush=True)
+        self.lines.append("")
+
     def header(self) -> str:
         wall = time.perf_counter() - self._wall0
         workers = "" if self.workers is None else \

@@ -19,14 +19,16 @@ def test_the_page_holds_what_was_printed_under_the_command(tmp_path, monkeypatch
     page.print("plain text", md="| markdown | form |")
     page.print("terminal only", md="")
     page.page("page only")
+    page.blank()
+    page.print("| after | a blank |")
     assert not target.exists()  # written at the end, whole
     page.write()
     out = capsys.readouterr().out
-    assert out.splitlines() == ["| a | b | extra", "plain text", "terminal only"]
+    assert out.splitlines() == ["| a | b | extra", "plain text", "terminal only", "", "| after | a blank |"]
     head, body = target.read_text().split("\n\n", 1)
     assert head.startswith(f"Written by `python -m gcs_tools.studies x scan --set 'a.b=[1, 2]' --markdown {target}`: ")
     assert "with 2 worker processes on " in head and "load average" in head and head.endswith("What the table holds.")
-    assert body == "| a | b | extra\n| markdown | form |\npage only\n"
+    assert body == "| a | b | extra\n| markdown | form |\npage only\n\n| after | a blank |\n"
 
 
 def test_without_a_file_nothing_is_written(tmp_path, monkeypatch, capsys):
