@@ -107,6 +107,7 @@ class Flight(StackLink):
         self.acks: dict = {}
 
     def pump(self, rows: list | None = None, timeout: float = 0.05) -> None:
+        """Read what both links have (PX4's samples go to ``lpos`` and ``att``; ``rows`` is not used)."""
         m = self.px4.recv_match(blocking=True, timeout=timeout)
         while m is not None:
             self._px4(m)
