@@ -27,7 +27,7 @@ from .rig_core import _probe_name
 
 HILMS = _probe_name("helix", "full")
 IDEAL = _probe_name("helix", "ideal")
-HILMS_TARGETS = (Target(">=", 500.0, "issue 13"),)
+HILMS_TARGETS = (Target(">=", 500.0, "quiet machine"),)
 
 
 @benchmark("hardware-rig", probes=(HILMS, IDEAL),

@@ -96,7 +96,7 @@ def ratio(subject: float, reference: float) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class Target:
-    """A goal for a metric, e.g. ``Target(">=", 200, "issue 2")``."""
+    """A goal for a metric, e.g. ``Target(">=", 200, "sweeps of many rigs")``."""
 
     op: str
     value: float

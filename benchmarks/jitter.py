@@ -51,7 +51,7 @@ PACER_PROBE = "jitter-pacer"
 CACHE_GROUP = "served-rig"
 CHUNK_S = 0.005  # the serve loop's chunk at speed-up 1 (--chunk-ms default)
 SETTLE_S = 0.5
-JITTER_TARGET = Target("<=", 1.0, "issue 8")
+JITTER_TARGET = Target("<=", 1.0, "the control period within 1 ms")
 
 
 @probe(RIG_PROBE, params={"duration_s": 30.0}, quick={"duration_s": 2.0}, cache=CACHE_GROUP,

@@ -76,7 +76,7 @@ DURATION_S = 5.0
 QUICK_DURATION_S = 1.0
 OMEGA_RANGE = (0.2, 2.0)
 SCHEDULER_ENV = "HILMS_BENCH_SCHEDULER"
-EFFICIENCY_TARGET = Target(">=", 0.8, "issue 8")
+EFFICIENCY_TARGET = Target(">=", 0.8, "parallel efficiency")
 #: One BLAS thread per process: the workers are as many as the cores already, and OpenBLAS's
 #: own threads (one per core, spinning while they wait) tripled the CPU cost of a rig's
 #: set-up (the load-cell Kalman gain's DARE solve) on this 2-core machine.

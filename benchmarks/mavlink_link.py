@@ -55,7 +55,7 @@ CACHE_GROUP = "served-rig"
 STRESS_HZ = 200
 ATTITUDE_HZ = 25.0  # its default rate (rig_emulator/link/telemetry/stream_table.py)
 #: Simulated seconds per wall second that count as "control rate held" at speed-up 1.
-HELD_TARGET = Target(">=", 0.99, "control rate held at speed-up 1 (issue 8)")
+HELD_TARGET = Target(">=", 0.99, "control rate held at speed-up 1")
 
 
 def _connect(url: str):

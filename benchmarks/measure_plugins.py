@@ -1,4 +1,4 @@
-"""Issue 16's plug-in figures in one process, on the warm numba cache of this checkout.
+"""The plug-ins' figures in one process, on the warm numba cache of this checkout.
 
     python -m benchmarks.measure_plugins speed [--duration 20]     # real-time factors, wall and CPU
     python -m benchmarks.measure_plugins pid-equivalence           # PID plug-in vs built-in, 60 s helix

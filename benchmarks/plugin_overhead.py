@@ -52,7 +52,7 @@ from rig_emulator.api import simulate
 import rig_emulator
 t1 = time.perf_counter()
 presets = os.path.join(os.path.dirname(rig_emulator.__file__), "presets", "airframes")
-def airframe(name):  # "ideal": the tree's ideal plant (hilms was ideal before issue 13 added hilms-ideal)
+def airframe(name):  # "ideal": the tree's ideal plant (older trees have no hilms-ideal: their hilms was ideal)
     if name != "ideal":
         return name
     return "hilms-ideal" if os.path.exists(os.path.join(presets, "hilms-ideal.toml")) else "hilms"

@@ -84,8 +84,8 @@ for _name, (_scenario, _ctrl, _call) in PROBES.items():
         description=f"simulate({_scenario!r}, 'pid', controller={_ctrl!r}, controller.call={_call!r})",
     )
 
-PYTHON_TARGET = (Target(">=", 50.0, "issue 16"),)
-COMPILED_TARGET = (Target(">=", 300.0, "issue 16"),)
+PYTHON_TARGET = (Target(">=", 50.0, "a Python plug-in"),)
+COMPILED_TARGET = (Target(">=", 300.0, "a compiled plug-in"),)
 CASCADED_TARGET = (Target(">=", 150.0, "plain-Python cascaded PID"),)
 
 

@@ -30,7 +30,7 @@ from .px4_echo_simulator import PREFIX as ECHO_PREFIX
 RIG_PROBE = "px4-lockstep-rig"
 REFERENCE_PROBE = "px4-lockstep-reference"
 RIG_PREFIX = "rig-emulator: px4 simulator on "
-RTF_TARGET = Target(">=", 10.0, "issue 16: at least 10x real time at a 250 Hz step")
+RTF_TARGET = Target(">=", 10.0, "at least 10x real time at a 250 Hz step")
 
 
 def _fly(url: str, sim_s: float):

@@ -45,8 +45,8 @@ STRATEGY = "smc-flc"
 DURATION_S = 30.0
 QUICK_DURATION_S = 5.0
 
-RTF_TARGETS = (Target(">=", 200.0, "issue 2"), Target(">=", 300.0, "issue 8"))
-VS_ROTORPY_TARGETS = (Target(">=", 400.0, "issue 8"),)
+RTF_TARGETS = (Target(">=", 200.0, "sweeps of many rigs"), Target(">=", 300.0, "full fidelity"))
+VS_ROTORPY_TARGETS = (Target(">=", 400.0, "against RotorPy, the same run"),)
 
 
 def _import_simulate() -> Callable:
@@ -138,9 +138,9 @@ def rig_simulate_probe(scenario: str, strategy: str, duration: float, seed: int,
 VARIANTS = {"core": False, "full": True, "ideal": True}  # name -> sensors simulated
 #: name -> airframe: the default plant (the hardware rig ``hilms``) or the ideal plant
 VARIANT_AIRFRAME = {"core": None, "full": None, "ideal": "hilms-ideal"}
-CORE_TARGETS = (Target(">=", 200.0, "issue 2"),)
-FULL_TARGETS = (Target(">=", 300.0, "issue 8"), Target(">=", 500.0, "issue 13"))
-COST_TARGETS = (Target("<=", 2.0, "issue 3"),)
+CORE_TARGETS = (Target(">=", 200.0, "sweeps of many rigs"),)
+FULL_TARGETS = (Target(">=", 300.0, "full fidelity"), Target(">=", 500.0, "quiet machine"))
+COST_TARGETS = (Target("<=", 2.0, "the sensor models at most halve the speed"),)
 
 
 def _probe_name(scenario: str, variant: str = "full") -> str:
@@ -170,7 +170,7 @@ def rig_core(stats: dict[str, ProbeStats]) -> list[Metric]:
     for sc in SCENARIOS:
         core = stats[_probe_name(sc, "core")]
         out.append(core.metric("rtf", f"{sc}: core real-time factor (no sensor models)", "x real time",
-                               targets=CORE_TARGETS, note="true-state feedback, issue 2's figure"))
+                               targets=CORE_TARGETS, note="true-state feedback: the physics and the control laws alone"))
         out.append(paired_ratio_metric(core, "rtf", ref, "rtf", f"{sc}: core speed vs RotorPy"))
         s = stats[_probe_name(sc, "full")]
         out.append(s.metric("rtf", f"{sc}: full-fidelity real-time factor", "x real time", targets=FULL_TARGETS,
@@ -181,7 +181,7 @@ def rig_core(stats: dict[str, ProbeStats]) -> list[Metric]:
                                        targets=COST_TARGETS))
         ideal = stats[_probe_name(sc, "ideal")]
         out.append(ideal.metric("rtf", f"{sc}: ideal plant (hilms-ideal) full-fidelity real-time factor",
-                                "x real time", note="the same rig without the hardware effects (issue 13)"))
+                                "x real time", note="the same rig without the hardware effects"))
         out.append(paired_ratio_metric(s, "rtf", ideal, "rtf", f"{sc}: hardware rig speed vs the ideal plant",
                                        note="the hardware effects' cost"))
         out.append(s.metric("rtf_end_to_end", f"{sc}: real-time factor end to end", "x real time",

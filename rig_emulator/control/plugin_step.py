@@ -190,7 +190,7 @@ def _call(k, t, period, first, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx
             obs[O_THRUST + i] = pp.thrust_efficiency[i] * thrust_from_voltage(x[13 + i], pp.k_v, pp.f_ceiling)
     for i in range(O_REF_SIZE):  # ref grew past 20 (offboard entries): never into O_ATT_TARGET
         obs[O_REF + i] = ref[i]
-    obs[O_REF_THRUST] = ref[REF_THRUST]  # s5-plugin: the offboard thrust set-point, plug-in path only
+    obs[O_REF_THRUST] = ref[REF_THRUST]  # the offboard thrust set-point, in a slot of its own past the 20 reference values
     if not sp.estimated:
         obs[O_TRUE_VALID] = 1.0
         for i in range(13):

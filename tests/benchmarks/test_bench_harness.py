@@ -81,10 +81,10 @@ def test_format_table_aligns_and_checks_width():
 
 
 def test_target():
-    t = Target(">=", 200, "issue 2")
+    t = Target(">=", 200, "sweeps of many rigs")
     assert t.met(200) and not t.met(199.9)
     assert Target("<=", 5, "x").met(4)
-    assert t.describe() == ">= 200 (issue 2)"
+    assert t.describe() == ">= 200 (sweeps of many rigs)"
     with pytest.raises(ValueError):
         Target(">", 1, "x")
 

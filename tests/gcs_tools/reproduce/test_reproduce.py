@@ -144,7 +144,7 @@ def test_a_diverged_run_is_reported_with_its_time_not_a_crash():
 
 
 def test_both_plants_side_by_side_over_seeds(tmp_path):
-    """Issue 13: every experiment on each plant and seed; the report shows paper | hilms | hilms-ideal."""
+    """Both plants: every experiment on each plant and seed; the report shows paper | hilms | hilms-ideal."""
     out = reproduce(tmp_path, seed=0, workers=1, only=["shocks"], quick=True, show_progress=False, seeds=2)
     assert [c.airframe for c in out.columns] == ["hilms", "hilms-ideal"]
     assert all(sorted(c.sections) == [0, 1] for c in out.columns)

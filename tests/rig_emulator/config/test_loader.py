@@ -102,7 +102,7 @@ def test_waypoint_guidance_needs_waypoints():
 
 
 def test_hilms_is_hilms_ideal_plus_its_hardware_preset():
-    """Issue 13: the default airframe is the hardware rig; ``hilms-ideal`` has every effect neutral."""
+    """The default airframe is the hardware rig; ``hilms-ideal`` has every effect neutral."""
     hw, ideal = load_config("hilms"), load_config("hilms-ideal")
     differ = {k for k in SCHEMA if hw[k] != ideal[k]}
     # the virtual ground's resting contact is a reading of the hardware rig (physics/ground.py), kept beside sim.ground

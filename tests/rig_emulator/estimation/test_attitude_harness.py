@@ -1,4 +1,4 @@
-"""Issue 3 acceptance: calibration -> ensemble -> complementary filter on a closed harness.
+"""The attitude chain end to end: calibration -> ensemble -> complementary filter on a closed harness.
 
 Figures (seed 11/12 modules and calibration, seed 5 noise) are printed with ``-s``.
 """

@@ -56,7 +56,7 @@ def test_guards_hold_previous_value_on_jumps_and_above_850_grf():
 
 
 def test_floor_guard_rejects_a_dead_cell_for_good():
-    """Issue 9: a dead cell (0 counts, about -850 grF) is discarded like a reading above the
+    """A dead cell (0 counts, about -850 grF) is discarded like a reading above the
     ceiling - never re-accepted - so its thrust stays at the last accepted reading."""
     p = _params(mode="iir", reaccept_after=3)
     s = load_cell_filter_state(4)

@@ -138,7 +138,7 @@ def test_rk4_attitude_matches_constant_rate_rotation():
 
 
 def test_motor_fault_scales_that_motors_thrust_torque_and_rotor_speed():
-    """Issue 9: motor 1 at 60 % of its thrust lowers u1, pitches (u3 < 0) and unbalances yaw."""
+    """A weak motor: motor 1 at 60 % of its thrust lowers u1, pitches (u3 < 0) and unbalances yaw."""
     h = PP.mass * PP.g / 4
     x = _state()
     pp = PP._replace(thrust_efficiency=np.array([0.6, 1.0, 1.0, 1.0]))
@@ -152,7 +152,7 @@ def test_motor_fault_scales_that_motors_thrust_torque_and_rotor_speed():
 
 
 def test_vehicle_with_stopped_motors_rests_on_the_ground():
-    """Issue 9 Reading: on the virtual ground without thrust (disarmed, failsafe) no sliding on."""
+    """On the virtual ground without thrust (disarmed, failsafe) no sliding on."""
     from rig_emulator.physics.integrator import apply_ground
 
     pp = physics_params(load_config("hilms-ideal"))
