@@ -137,7 +137,15 @@ def _quat_of(euler) -> tuple:
 
 
 def _t(v) -> tuple:
+    if type(v) is list:  # a row of _row_lists: Python floats already
+        return tuple(v)
     return tuple(float(a) for a in np.atleast_1d(v))
+
+
+def _row_lists(series: dict) -> dict:
+    """``series`` with every array as nested Python lists: :func:`row_snapshot` then reads a row's numbers
+    as floats without making a numpy scalar of each (the same values, bit for bit)."""
+    return {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in series.items()}
 
 
 def row_snapshot(series: dict, i: int, guidance: str, physics_rate_hz: float | None = None,
@@ -160,7 +168,7 @@ def row_snapshot(series: dict, i: int, guidance: str, physics_rate_hz: float | N
     euler = s["euler"][i]
     nan3 = (math.nan,) * 3
     pos_des = s["pos_des"][i]
-    attitude_mode = s["mode"][i] == 1.0 or not np.all(np.isfinite(pos_des))
+    attitude_mode = s["mode"][i] == 1.0 or not all(math.isfinite(float(v)) for v in pos_des)
     return RigSnapshot(
         time_s=t, time_us=time_us, commands_time_us=commands_us, cells_time_us=cells_us, armed=True, position=_t(s["pos"][i]), velocity=_t(s["vel"][i]),
         quaternion=_quat_of(euler), euler=_t(euler), euler_rates=_t(s["euler_rate"][i]), body_rates=_t(s["omega"][i]),
@@ -211,8 +219,8 @@ def iter_messages(result, home: Home = DEFAULT_HOME, sysid: int = 1, label: str 
     modes.note(OFFBOARD, 0)
     ctx = TelemetryContext(rig=SimpleNamespace(cfg=cfg), home=home, sensors=load_sensor_model(), modes=modes,
                            counters=LinkCounters(), sysid=sysid, boot_unix_s=0.0)
-    series = result.series
-    n = series["t"].shape[0]
+    series = _row_lists(result.series)
+    n = len(series["t"])
     guidance = cfg["guidance.type"]
     next_second = -math.inf
     other_div = max(1, int(round(float(cfg["sim.log_rate_hz"]) / OTHER_STREAMS_MAX_HZ)))
