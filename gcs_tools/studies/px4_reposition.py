@@ -69,8 +69,36 @@ def geometry_airframe(shipped: str) -> str:
                       "param set-default THR_MDL_FAC 0.0", "param set-default MPC_THR_HOVER 0.78", ""])
 
 
-def install_airframes(build: Path) -> None:
-    """Copy the rig's airframe into the build and write the geometry-only one beside it."""
+def variant_airframe(shipped: str, changes: dict[str, str]) -> str:
+    """The shipped airframe with ``changes`` (PX4 parameter -> value) set after its own lines (PX4 keeps the
+    last ``param set-default`` of a name)."""
+    lines = [f"param set-default {k} {v}" for k, v in changes.items()]
+    return shipped.rstrip("\n") + "\n\n# changed by gcs_tools.studies px4-reposition --variant\n" + "\n".join(lines) + "\n"
+
+
+def variant_names(i: int) -> tuple[str, str]:
+    """(file, PX4_SIM_MODEL) of the i-th --variant (0-based): 10092_none_hilmsv0, ..."""
+    return f"{10092 + i}_none_hilmsv{i}", f"none_hilmsv{i}"
+
+
+def parse_variant(text: str) -> dict[str, str]:
+    """``NAME=VALUE[,NAME=VALUE...]`` of ``--variant`` (PX4 parameter names, numbers)."""
+    out = {}
+    for item in text.split(","):
+        name, sep, value = item.partition("=")
+        name = name.strip().upper()
+        try:
+            if not sep or not name or not name.replace("_", "").isalnum():
+                raise ValueError
+            float(value)
+        except ValueError:
+            raise ValueError(f"--variant {text!r}: must be NAME=NUMBER[,NAME=NUMBER...] (PX4 parameters)") from None
+        out[name] = value.strip()
+    return out
+
+
+def install_airframes(build: Path, variants: list[dict[str, str]] = ()) -> None:
+    """Copy the rig's airframe into the build and write the geometry-only one and each variant beside it."""
     from rig_emulator.link.px4_simulator.serve_px4 import AIRFRAME_FILE
 
     folder = build / "etc" / "init.d-posix" / "airframes"
@@ -79,6 +107,8 @@ def install_airframes(build: Path) -> None:
     shipped = Path(AIRFRAME_FILE).read_text()
     (folder / AIRFRAMES["hilms"][0]).write_text(shipped)
     (folder / AIRFRAMES["geometry"][0]).write_text(geometry_airframe(shipped))
+    for i, changes in enumerate(variants):
+        (folder / variant_names(i)[0]).write_text(variant_airframe(shipped, changes))
 
 
 
@@ -217,8 +247,8 @@ def fly(flight: Flight) -> dict:
 
 
 
-def session(px4: Path, airframe: str, seed: int | None) -> dict:
-    """One session: a fresh rig, a fresh PX4 with ``airframe``, the flight."""
+def session(px4: Path, model: str, seed: int | None) -> dict:
+    """One session: a fresh rig, a fresh PX4 with the airframe PX4_SIM_MODEL ``model``, the flight."""
     build = px4 / "build" / "px4_sitl_default"
     rig_port = free_port()
     args = ["--px4-simulator", "127.0.0.1:4560", "--mavlink", f"tcpin:127.0.0.1:{rig_port}", "--no-persist"]
@@ -226,7 +256,7 @@ def session(px4: Path, airframe: str, seed: int | None) -> dict:
     rootfs = Path(tempfile.mkdtemp(prefix="px4-rootfs-"))
     px4_proc = None
     try:
-        env = dict(os.environ, PX4_SIM_MODEL=AIRFRAMES[airframe][1])
+        env = dict(os.environ, PX4_SIM_MODEL=model)
         env.pop("PX4_SYS_AUTOSTART", None)
         with open(rootfs / "console.log", "w") as console:
             px4_proc = subprocess.Popen([str(build / "bin" / "px4"), "-d", str(build / "etc")], cwd=rootfs, env=env,
@@ -239,9 +269,10 @@ def session(px4: Path, airframe: str, seed: int | None) -> dict:
 
 
 def table(results: dict[str, list[dict]]) -> list[str]:
-    """The page's table: one column per airframe, each cell the range over sessions and repositions."""
+    """The page's table: one column per airframe (``results``' keys are the headers), each cell the range
+    over sessions and repositions."""
     names = list(results)
-    rows = [f"| 5 m reposition | {' | '.join(f'`{AIRFRAMES[n][0]}`' for n in names)} |",
+    rows = [f"| 5 m reposition | {' | '.join(names)} |",
             "|---|" + "---|" * len(names)]
     for key, (label, unit, digits) in FIGURES.items():
         cells = []
@@ -267,6 +298,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--sessions", type=int, default=3, metavar="N", help="sessions per airframe (default %(default)s)")
     ap.add_argument("--airframes", default="geometry,hilms", metavar="A,B",
                     help=f"airframes to fly, of {', '.join(AIRFRAMES)} (default %(default)s)")
+    ap.add_argument("--variant", action="append", default=[], metavar="NAME=VALUE[,...]",
+                    help="also fly the rig's airframe with these PX4 parameters changed (repeatable: one column "
+                         "each); what a row of the guide's parameter table does")
     ap.add_argument("--seed", type=int, default=None, help="the rig's noise seed (sim.seed; default the preset's)")
     ap.add_argument("--markdown", metavar="FILE", help="also write the table to FILE, with the command and the machine")
     return ap
@@ -278,22 +312,31 @@ def main(argv=None) -> None:
     names = chosen(a.airframes, AIRFRAMES, "--airframes", parser().error)
     if a.sessions < 1:
         parser().error("--sessions: must be at least 1")
+    try:
+        variants = [parse_variant(v) for v in a.variant]
+    except ValueError as exc:
+        parser().error(str(exc))
+    if len(variants) > 8:
+        parser().error("--variant: at most 8 (airframes 10092..10099)")
     binary = px4 / "build" / "px4_sitl_default" / "bin" / "px4"
     if not binary.is_file():
         parser().error(f"--px4: {binary} does not exist: build PX4 SITL first (docs/how-to/flight-stacks.md)")
-    install_airframes(px4 / "build" / "px4_sitl_default")
+    install_airframes(px4 / "build" / "px4_sitl_default", variants)
     commit = git_commit(px4)
     out = Page(a.markdown, f"PX4 SITL (commit {commit}) flying the default rig `hilms` in lockstep: each figure "
                            f"the range over {a.sessions} session(s) per airframe (a fresh rig and PX4 each) of "
                            f"{len(TARGETS)} repositions each.")
-    results: dict[str, list[dict]] = {n: [] for n in names}
+    columns = [(f"`{AIRFRAMES[n][0]}`", AIRFRAMES[n][1]) for n in names]
+    columns += [(f"`{AIRFRAMES['hilms'][0]}` with " + ", ".join(f"`{k} {v}`" for k, v in changes.items()),
+                 variant_names(i)[1]) for i, changes in enumerate(variants)]
+    results: dict[str, list[dict]] = {header: [] for header, _ in columns}
     for i in range(a.sessions):
-        for n in names:
-            r = session(px4, n, a.seed)
-            results[n].append(r)
+        for header, model in columns:
+            r = session(px4, model, a.seed)
+            results[header].append(r)
             reps = " ".join(f"{x['alt_dev_m']:.3f}/{x.get('rig_alt_dev_m', NAN):.3f} m "
                             f"{x['tilt_deg']:.1f}/{x.get('rig_tilt_deg', NAN):.1f} deg" for x in r["repositions"])
-            print(f"{n} session {i + 1}: {reps}; landed {r['landed']}", flush=True)
+            print(f"{model} session {i + 1}: {reps}; landed {r['landed']}", flush=True)
     for line in table(results):
         out.print(line)
     out.write()

@@ -47,8 +47,22 @@ def test_the_airframes_are_installed_where_px4_finds_them_by_name(tmp_path):
     PX4.install_airframes(tmp_path)
     assert sorted(p.name for p in folder.iterdir()) == sorted(f for f, _ in PX4.AIRFRAMES.values())
     assert (folder / "10090_none_hilms").read_text() == open(AIRFRAME_FILE).read()
-    for file, model in PX4.AIRFRAMES.values():  # PX4_SIM_MODEL=MODEL finds NNNNN_MODEL
-        assert file.split("_", 1)[1] == model
+    PX4.install_airframes(tmp_path, [{"MPC_JERK_AUTO": "1.5"}, {"MPC_YAWRAUTO_MAX": "45", "MPC_YAWRAUTO_ACC": "60"}])
+    assert {"10092_none_hilmsv0", "10093_none_hilmsv1"} <= {p.name for p in folder.iterdir()}
+    v1 = _params((folder / "10093_none_hilmsv1").read_text())
+    assert v1 == {**_params(open(AIRFRAME_FILE).read()), "MPC_YAWRAUTO_MAX": "45", "MPC_YAWRAUTO_ACC": "60"}
+    # PX4 keeps the last set-default of a name: the changed value comes after the shipped one
+    text = (folder / "10092_none_hilmsv0").read_text()
+    assert text.rindex("MPC_JERK_AUTO 1.5") > text.index("MPC_JERK_AUTO")
+    for file, model in [*PX4.AIRFRAMES.values(), PX4.variant_names(0), PX4.variant_names(1)]:
+        assert file.split("_", 1)[1] == model  # PX4_SIM_MODEL=MODEL finds NNNNN_MODEL
+
+
+def test_a_variant_is_px4_parameters_and_numbers():
+    assert PX4.parse_variant("mpc_jerk_auto=1.5, MPC_XY_VEL_MAX=3") == {"MPC_JERK_AUTO": "1.5", "MPC_XY_VEL_MAX": "3"}
+    for bad in ("MPC_JERK_AUTO", "MPC_JERK_AUTO=fast", "=1", "A B=1"):
+        with pytest.raises(ValueError, match="--variant"):
+            PX4.parse_variant(bad)
 
 
 def _session(alt, tilt, landed=True):
@@ -59,8 +73,8 @@ def _session(alt, tilt, landed=True):
 
 
 def test_the_px4_table_gives_each_figure_as_its_range_over_sessions_and_repositions():
-    rows = PX4.table({"geometry": [_session(0.5, 19.0), _session(2.1, 17.3, landed=False)],
-                      "hilms": [_session(0.012, 7.0), _session(0.034, 6.6)]})
+    rows = PX4.table({"`10091_none_hilmsgeom`": [_session(0.5, 19.0), _session(2.1, 17.3, landed=False)],
+                      "`10090_none_hilms`": [_session(0.012, 7.0), _session(0.034, 6.6)]})
     cells = {r[0]: r[1:] for r in table_rows("\n".join(rows))}
     assert rows[0] == "| 5 m reposition | `10091_none_hilmsgeom` | `10090_none_hilms` |"
     assert cells["altitude deviation, PX4's estimate"] == ["0.500-2.100 m", "0.012-0.034 m"]
@@ -111,6 +125,7 @@ def test_the_ardupilot_row_gives_ranges_and_the_landings():
     (PX4, ["--px4", "{tmp}"], "--px4: .*bin/px4 does not exist"),
     (PX4, ["--px4", "{tmp}", "--airframes", "hilms,iris"], "--airframes: iris"),
     (PX4, ["--px4", "{tmp}", "--sessions", "0"], "--sessions: must be at least 1"),
+    (PX4, ["--px4", "{tmp}", "--variant", "MPC_JERK_AUTO"], "--variant 'MPC_JERK_AUTO': must be NAME=NUMBER"),
     (AP, ["--ardupilot", "{tmp}"], "--ardupilot: .*arducopter does not exist"),
     (AP, ["--ardupilot", "{tmp}", "--variants", "fast"], "--variants: fast"),
     (AP, ["--ardupilot", "{tmp}", "--speedup", "0"], "--speedup: must be positive"),
