@@ -12,7 +12,9 @@ a fresh PX4 (a new ``rootfs``) with one airframe:
   build as the guide says;
 * ``geometry``: the same geometry on PX4's multicopter defaults, ``THR_MDL_FAC 0`` and
   ``MPC_THR_HOVER 0.78`` (linear motors at the ideal plant's hover share), written into the build
-  as ``10091_none_hilmsgeom``.
+  as ``10091_none_hilmsgeom``;
+* each ``--variant NAME=VALUE[,...]``: the rig's airframe with those values changed, written into the
+  build as ``10092_none_hilmsv0``, ``10093_none_hilmsv1``, ... (a column each).
 
 A pymavlink client on PX4's offboard link (UDP 14540) arms once PX4 has a home position, takes
 off (``MAV_CMD_NAV_TAKEOFF``, PX4's 2.5 m), hovers 20 s and sends three ``MAV_CMD_DO_REPOSITION``
