@@ -39,9 +39,11 @@ def _f32(v) -> float:
 
 def test_param_list_set_and_load_are_exact(rig, relay, capsys, tmp_path):
     t0 = time.monotonic()
-    # 10 re-requests per missing index: with 20 % loss each way a request fails 36 % of the time, so
-    # QGroundControl's 5 leave an index missing (a clear error) in about 0.6 % of the indices
-    assert main(["param", "list", relay.client_url, "--timeout", "0.3", "--retries", "10"]) == 0
+    # 20 re-requests per missing index: with 20 % loss each way a request fails 36 % of the time, so
+    # QGroundControl's 5 leave an index missing (a clear error) in about 0.6 % of the indices; 10 left one
+    # of 168 missing about once in 150 runs, more often on a loaded machine, where an answer can come
+    # later than the 0.3 s timeout
+    assert main(["param", "list", relay.client_url, "--timeout", "0.3", "--retries", "20"]) == 0
     t_list = time.monotonic() - t0
     lines = capsys.readouterr().out.splitlines()
     listed = {ln.split()[0]: _f32(float(ln.split()[1])) for ln in lines[:-1]}  # shortest float32 decimals
