@@ -28,6 +28,7 @@ import io
 import json
 import math
 import os
+import re
 import sys
 import textwrap
 import xml.etree.ElementTree as ET
@@ -432,14 +433,12 @@ def held_out_page(path: Path, wall_s: float | None, machine: str) -> str:
 def refit_page(path: Path, machine: str) -> str:
     """docs/generated/paper-refit.md from the ``--json FILE`` of a ``rig-gcs identify --paper`` fit: each
     fitted key's start (the shipped value the fit starts from) and its fitted value with the fit's sigma."""
-    import re as _re
-
     from rig_emulator.config.schema import SCHEMA
 
     doc = json.loads(Path(path).read_text())
 
     def unit_of(key: str) -> str:
-        spec = SCHEMA.get(_re.sub(r"\[.*\]$", "", key))
+        spec = SCHEMA.get(re.sub(r"\[.*\]$", "", key))
         return spec.unit if spec is not None else ""
 
     def fmt(v, unit: str, sigma=None) -> str:

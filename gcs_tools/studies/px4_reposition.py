@@ -173,17 +173,11 @@ class Flight(StackLink):
             self.acks[m.command] = m.result
 
     def reposition(self, lat: float, lon: float):
+        """MAV_CMD_DO_REPOSITION (COMMAND_INT, global) to ``lat``, ``lon`` at the current altitude: the result."""
         M = self.M
-        for _ in range(5):
-            self.acks.pop(M.MAV_CMD_DO_REPOSITION, None)
-            self.px4.mav.command_int_send(1, 1, M.MAV_FRAME_GLOBAL, M.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, NAN,
-                                          int(round(lat * 1e7)), int(round(lon * 1e7)), NAN)
-            w0 = time.monotonic()
-            while time.monotonic() - w0 < 1.0 and M.MAV_CMD_DO_REPOSITION not in self.acks:
-                self.pump()
-            if M.MAV_CMD_DO_REPOSITION in self.acks:
-                return self.acks[M.MAV_CMD_DO_REPOSITION]
-        return None
+        return self.acked(M.MAV_CMD_DO_REPOSITION, lambda: self.px4.mav.command_int_send(
+            *self.target, M.MAV_FRAME_GLOBAL, M.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, NAN,
+            int(round(lat * 1e7)), int(round(lon * 1e7)), NAN), tries=5)
 
 
 def fly(flight: Flight) -> dict:

@@ -3,6 +3,7 @@ processes, and the figures they take from a flight (:mod:`.px4_reposition`, :mod
 
 from __future__ import annotations
 
+import abc
 import math
 import os
 import signal
@@ -89,7 +90,7 @@ def git_commit(tree) -> str:
     return done.stdout.strip() or "unknown"
 
 
-class StackLink:
+class StackLink(abc.ABC):
     """A flight stack's MAVLink link, timed in the flight stack's own (simulated) clock.
 
     A subclass sets ``link`` (its pymavlink connection), ``target`` (system, component), keeps ``t``
@@ -97,8 +98,9 @@ class StackLink:
 
     ack_wait_s = 1.0  # wall time to wait for each COMMAND_ACK before sending again
 
+    @abc.abstractmethod
     def pump(self, rows: list | None = None):
-        raise NotImplementedError
+        """Read what the links have; the stack's samples for a figure go into ``rows`` (if the subclass keeps any)."""
 
     def wait(self, seconds: float, rows: list | None = None, until=None, wall_limit: float = 900.0) -> bool:
         """Pump for ``seconds`` of the stack's time (or until ``until()``); False on the wall-clock limit."""
@@ -114,9 +116,14 @@ class StackLink:
     def command(self, command: int, *p: float, tries: int = 10):
         """COMMAND_LONG ``command`` with params ``p``, sent until acknowledged: the result (None: never)."""
         p = list(p) + [0.0] * (7 - len(p))
+        return self.acked(command, lambda: self.link.mav.command_long_send(*self.target, command, 0, *p), tries)
+
+    def acked(self, command: int, send, tries: int = 10):
+        """Call ``send()`` (a COMMAND_LONG or COMMAND_INT of ``command``) until the stack acknowledges it:
+        the result (None: never, after ``tries`` sends)."""
         for _ in range(tries):
             self.acks.pop(command, None)
-            self.link.mav.command_long_send(*self.target, command, 0, *p)
+            send()
             w0 = time.monotonic()
             while time.monotonic() - w0 < self.ack_wait_s:
                 self.pump()

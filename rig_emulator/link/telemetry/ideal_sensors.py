@@ -44,6 +44,11 @@ class SensorModel:
     cell_grf_per_count: float
     cell_count_max: float
 
+    @functools.cached_property
+    def raw_scaling(self) -> tuple:
+        """(LSB, lowest count, highest count) of each of the 9 raw IMU channels: gyro x3, accel x3, mag x3."""
+        return np.repeat(self.lsb, 3), np.repeat(self.count_min, 3), np.repeat(self.count_max, 3)
+
 
 def load_sensor_model() -> SensorModel:
     imu = load_imu_config()
@@ -91,18 +96,6 @@ class SensorReadings:
         return tuple(f == 0 and not r for f, r in zip(self.load_faults, rejected))
 
 
-_SCALING: dict = {}  # id(model) -> (model, lsb, count_min, count_max) per raw channel (gyro x3, accel x3, mag x3)
-
-
-def _count_scaling(model: SensorModel) -> tuple:
-    """Per-channel LSB and count limits of the 9 raw IMU channels, computed once per model."""
-    hit = _SCALING.get(id(model))
-    if hit is None or hit[0] is not model:
-        hit = (model, np.repeat(model.lsb, 3), np.repeat(model.count_min, 3), np.repeat(model.count_max, 3))
-        _SCALING[id(model)] = hit
-    return hit[1:]
-
-
 def sensor_readings(snap, model: SensorModel, gravity: float) -> SensorReadings:
     """The readings of :class:`SensorReadings` for ``snap``: the simulated sensors' when the
     snapshot carries them, else the ideal ones of the module doc."""
@@ -113,7 +106,7 @@ def sensor_readings(snap, model: SensorModel, gravity: float) -> SensorReadings:
     accel1 = r_wb.T @ np.array([0.0, 0.0, gravity])
     mag1 = r_wb.T @ model.earth_field_w
     n = model.n_modules
-    lsb, lo, hi = _count_scaling(model)
+    lsb, lo, hi = model.raw_scaling
     # every module reads the same (ideal): one row computed, then repeated (a .tlog export calls this per row)
     # (np.minimum / np.maximum: np.clip's own overhead was most of a row's time)
     row = np.concatenate((gyro1, accel1, mag1))
