@@ -7,8 +7,8 @@ the loop it first looks for the callee's signature in that cache: a callee compi
 another process is loaded (and its code linked into the loop's module, as for one compiled
 here), not compiled again. So when :func:`split_compile` finds the step loop missing from
 the cache it starts a **helper process** that compiles independent subtrees of the loop's
-call tree (:func:`loop_jobs`: the rigid body's callees, the log row, the supervisor, the control
-update, guidance, the load-cell filter, the attitude estimation) into the cache while this process types the loop
+call tree (:func:`loop_jobs`: the rigid body's callees, the log row, the supervisor, the controller's
+turn, guidance, the load-cell filter, the attitude estimation) into the cache while this process types the loop
 and compiles the rest.
 
 The two share the jobs through claim files (``os.open(..., O_CREAT | O_EXCL)`` in a private
@@ -108,11 +108,14 @@ def is_cached(dispatcher, sig) -> bool | None:
 
 def loop_jobs(args: tuple) -> list:
     """The helper's share of the step loop's call tree for the loop's arguments ``args``: (dispatcher,
-    signature) pairs, in the reverse of the order the loop's typing reaches them. Each signature is
+    signature) pairs, the controller's turn and the built-in strategy's stages first (the longest piece),
+    then the rest in the reverse of the order the loop's typing reaches them. Each signature is
     numba's type of a value of the kind the loop passes (a test checks them against what numba types
     the loop's calls with); a signature that differs costs the split, never correctness (the callee is
     then compiled here)."""
-    from rig_emulator.control.controller import control_update
+    from rig_emulator.control.plugin_step import Actuators
+    from rig_emulator.control.plugin_step import _control as control
+    from rig_emulator.controllers.builtin.kernel import attitude_laws, position_laws
     from rig_emulator.control.supervisor import supervise
     from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
     from rig_emulator.estimation.load_cell_filter import load_cell_filter_step
@@ -140,8 +143,20 @@ def loop_jobs(args: tuple) -> list:
     calls += [
         (supervise, (f, bool(a["armed"]), sp.simulate, sp.estimated, f, f, f, f, f, cout, ss.awork.ensemble.rejected,
                      ss.awork.combined, ss.health[1], a["up"], a["us"])),
-        (control_update, (f, pos, pos, f, f, f, f, f, f, f, f, f, ref, a["cp"], a["cstate"], cout, a["v_cmd"],
-                          *(a["scratch"][i] for i in range(5)))),
+    ]
+    if a["pfn"] is not None:  # the controller's turn (none with motor commands from outside)
+        cp, pp, pl = a["cp"], a["pp"], a["pl"]
+        act = Actuators(cp.arm_length, cp.km_over_kf, cp.f_max, cp.alloc_priority, cp.k_v, cp.v_max)
+        # the built-in strategy's stages and the controller's turn first: their compile is the longest single
+        # piece, and this process reaches them mid-way through the loop (and the stages again in the kernel)
+        calls[:0] = [
+            (position_laws, (pl.obs, pl.laws, pl.rig_state, pl.rig_out, False)),
+            (attitude_laws, (pl.obs, pl.laws, pl.rig_state, pl.rig_out)),
+            (control, (0, f, f, f, pos, pos, f, f, f, f, f, f, f, f, f, ref, a["cstate"], cout, a["v_cmd"],
+                       a["scratch"][3], x, sp.simulate, sp.estimated, ss.thrust_est, ss.imu_raw, ss.cell_raw,
+                       pp.thrust_efficiency, pp.k_v, pp.f_ceiling, act, pl, a["pfn"])),
+        ]
+    calls += [
         (guidance_update, (f, pos, a["gp"], a["gstate"], a["reached_t"], ref)),
     ]
     if sp.simulate:  # without sensor models the loop never calls the estimators

@@ -2,17 +2,16 @@
 
 The first command after an install (or after an update of the compiled sources) compiles
 the step loop with numba; later ones load it from numba's on-disk cache
-(:mod:`rig_emulator._jit`) in about a second. A controller plug-in adds its own share: the
-first run with any plug-in compiles the loop's plug-in path (a specialisation of the loop
-with the call through a function pointer, shared by every plug-in), and a compiled plug-in
-(:class:`~rig_emulator.controllers.CompiledController`) compiles its kernel once. Each is
-cached afterwards.
+(:mod:`rig_emulator._jit`) in about a second. Every controller goes through the same loop (the
+call through a function pointer: the built-in strategies' kernel, a compiled plug-in, a Python
+one), so a plug-in's first run compiles only what is its own: a compiled plug-in
+(:class:`~rig_emulator.controllers.CompiledController`) its kernel, once. Each is cached
+afterwards.
 
 :func:`compile_notice` wraps the part of a command that compiles: when the cache lacks what
 the command is about to compile it prints, on stderr, what is compiled and roughly how long
 it takes, and afterwards how long it took. With a warm cache it prints nothing, so a notice
-appears once per install for the loop and its plug-in path, once per compiled plug-in for
-its kernel.
+appears once per install for the loop, once per compiled plug-in for its kernel.
 """
 
 from __future__ import annotations
@@ -27,9 +26,6 @@ from pathlib import Path
 #: cold compile of the step loop on a quiet 2-core machine, a helper process on the second core
 #: (rig_emulator/compile_helper.py; measured 21-23 s, docs/explanation/performance.md "Cold compile")
 QUIET_COMPILE_S = 25
-#: the step loop with the plug-in path (the loop and the plug-in's share together, quiet machine;
-#: ``python -m benchmarks --only plugins``: first call of plugin-python-trivial, cold cache)
-QUIET_PLUGIN_COMPILE_S = (30, 60)
 
 
 def _loop_signatures():
@@ -45,9 +41,9 @@ def _loop_signatures():
         return None
 
 
-def step_loop_cached(plugin: bool = False) -> bool:
-    """Whether numba's cache already holds the compiled step loop (of any argument types);
-    ``plugin``: the loop with the plug-in path (its last argument a function pointer)."""
+def step_loop_cached() -> bool:
+    """Whether numba's cache already holds the step loop a controller flies (its last argument a
+    function pointer: the built-in strategies and plug-ins alike; not the lockstep loop, which has none)."""
     from numba.core import types
 
     sigs = _loop_signatures()
@@ -55,8 +51,6 @@ def step_loop_cached(plugin: bool = False) -> bool:
         from rig_emulator import _jit
 
         return any(Path(_jit.CACHE_DIR).rglob("*.nbi"))
-    if not plugin:
-        return bool(sigs)
     return any(len(s) and isinstance(s[-1], types.FunctionType) for s in sigs)
 
 
@@ -94,19 +88,13 @@ def what_compiles(plugin: str | None = None, call: str = "compiled") -> str | No
     from rig_emulator import _jit
 
     where = f"cached afterwards in {_jit.CACHE_DIR}"
-    if plugin is None:
-        if step_loop_cached():
-            return None
-        return (f"compiling the step loop (first run of this install or after an update; about {QUIET_COMPILE_S} s "
-                f"on a quiet 2-core machine, longer on a busy one); later runs load it from {_jit.CACHE_DIR} "
-                f"in about a second")
-    kernel = _kernel(plugin) if call == "compiled" else None
+    kernel = _kernel(plugin) if plugin is not None and call == "compiled" else None
     kernel_cold = kernel is not None and not kernel_cached(kernel)
-    if not step_loop_cached(plugin=True):
-        lo, hi = QUIET_PLUGIN_COMPILE_S
-        extra = " and its kernel" if kernel_cold else ""
-        return (f"compiling the step loop with the plug-in path for controller {plugin}{extra} (first plug-in run "
-                f"of this install; about {lo}-{hi} s on a quiet 2-core machine, longer on a busy one; {where})")
+    if not step_loop_cached():
+        extra = f" and the kernel of controller {plugin}" if kernel_cold else ""
+        return (f"compiling the step loop{extra} (first run of this install or after an update; about "
+                f"{QUIET_COMPILE_S} s on a quiet 2-core machine, longer on a busy one); later runs load it from "
+                f"{_jit.CACHE_DIR} in about a second")
     if kernel_cold:
         return (f"compiling the kernel of controller {plugin} (first run of this plug-in; a few seconds, longer "
                 f"on a busy machine; {where})")
@@ -117,7 +105,7 @@ def what_compiles(plugin: str | None = None, call: str = "compiled") -> str | No
 def compile_notice(prog: str = "rig-emulator", stream=None, plugin: str | None = None, call: str = "compiled",
                    cfg=None):
     """Announce a cold compile on ``stream`` (stderr) around the block: the step loop, or with
-    ``plugin`` (``module:Name``, flown by ``call``) the loop's plug-in path and the plug-in's kernel;
+    ``plugin`` (``module:Name``, flown by ``call``) the plug-in's kernel too;
     ``cfg``: take both from a rig configuration (``controller.plugin``, ``controller.call``).
     Yields whether something was announced."""
     stream = stream if stream is not None else sys.stderr

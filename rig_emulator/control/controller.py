@@ -1,9 +1,14 @@
-"""One control update: guidance references in, motor voltage commands out.
+"""The stages of one control update: guidance references in, motor voltage commands out.
 
 Flow (Fig. 7): position law -> (u1, uX, uY) -> Eq. 35 -> desired attitude -> reference
 filter -> attitude law -> Euler-frame torques -> body torques -> allocation (A6 inverse)
 -> motor voltages (Eq. 40 inverse). In attitude mode (the paper's attitude experiments)
 the references come straight from guidance and u1 is the hover thrust m g.
+
+The built-in strategies run :func:`position_stage` and :func:`attitude_stage` inside their
+kernel on the plug-in interface (:mod:`rig_emulator.controllers.builtin.kernel`); the step loop
+applies every controller's command through :func:`actuate` (:mod:`rig_emulator.control.plugin_step`),
+and a plug-in that replaces one loop gets the rig's stage for the other.
 
 Layouts:
 
@@ -83,37 +88,22 @@ def _axis_errors(ref, k, pos, vel):
     return e, de, (0.0 if math.isnan(a) else a)
 
 
-# a call from the step loop (inlining it there cost cold compile time, docs/explanation/performance.md,
-# hardware-rig); its stages are inlined into it: a call passed cp (ControlParams) and the other
-# arguments field by field at every control step. They are also inlined into the plug-in path
-# (control/plugin_step.py), so a rig with a plug-in types them once more (one without prunes it)
-@jit(nrt=False)
-def control_update(dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, ref, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
-    """Run one controller update. ``e3, de3, acc3, s3, tau3`` are (3,) scratch arrays.
-
-    The three stages below are also the seams a controller plug-in replaces
-    (:mod:`rig_emulator.control.plugin_step`): :func:`position_stage` (position law to an
-    attitude target and u1), :func:`attitude_stage` (attitude law to Euler-frame torques) and
-    :func:`actuate` (allocation and Eq. 40 inverse).
-    """
-    u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags = position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout)
-    return attitude_to_motors(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, u1, r0, dr0, a0, r1, dr1, a1,
-                              r2, dr2, a2, flags, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3)
-
-
-@jit(inline="always")  # see the note above control_update
+# The stages are inline="always": each is compiled into its caller, the built-in strategy's kernel
+# (controllers/builtin/kernel.py) or the plug-in path (control/plugin_step.py); a call passed cp
+# (ControlParams) and the other arguments field by field at every control step.
+@jit(inline="always")
 def attitude_to_motors(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
                        flags, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
     """Everything after the attitude reference: the attitude law (:func:`attitude_stage`), its
-    Euler-frame torques turned to body torques, then :func:`actuate`. The one implementation of
-    that tail, for the built-in strategies and for a position-only plug-in alike. Returns the flags."""
+    Euler-frame torques turned to body torques, then :func:`actuate`: the rig's attitude loop
+    under a plug-in that replaces the position loop only. Returns the flags."""
     attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
                    cp, cstate, e3, de3, acc3, s3, tau3)
     u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
     return actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd)
 
 
-@jit(inline="always")  # see the note above control_update
+@jit(inline="always")
 def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
     """Position law (or, in attitude mode, the guidance's attitude references and u1 = m g).
 
@@ -170,7 +160,7 @@ def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
         psi_d = ref[REF_YAW]
         phi_d, theta_d, tilt_flags = desired_tilt(ux, uy, psi_d, cp.max_tilt)
         flags |= tilt_flags
-        r0, dr0, a0, r1, dr1, a1, r2, dr2, a2 = shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate)
+        r0, dr0, a0, r1, dr1, a1, r2, dr2, a2 = shape_attitude(dt, phi_d, theta_d, psi_d, cp.ref_omega, cstate)
     else:
         # attitude and rate modes: u1 is the hover thrust unless an offboard set-point gives it
         u1 = cp.mass * cp.g if math.isnan(ref[REF_THRUST]) else ref[REF_THRUST]
@@ -198,8 +188,8 @@ def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
     return u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2, flags
 
 
-@jit(inline="always")
-def shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate):
+@jit(nrt=False)  # a call (position_stage and a position plug-in's path both shape): compiled once
+def shape_attitude(dt, phi_d, theta_d, psi_d, ref_omega, cstate):
     """The reference filters (control/reference_filter.py) on a desired attitude; started on
     the target at the first update after arming. Returns (r, dr, a) per Euler angle."""
     if cstate[CS_STARTED] == 0.0:
@@ -207,13 +197,13 @@ def shape_attitude(dt, phi_d, theta_d, psi_d, cp, cstate):
         cstate[CS_FILTER + 2] = theta_d
         cstate[CS_FILTER + 4] = psi_d
     # np.int64() / np.bool_(): literal constant arguments would compile one specialisation per value
-    r0, dr0, a0 = reference_step(phi_d, cstate, np.int64(0), cp.ref_omega, dt, np.bool_(False))
-    r1, dr1, a1 = reference_step(theta_d, cstate, np.int64(1), cp.ref_omega, dt, np.bool_(False))
-    r2, dr2, a2 = reference_step(psi_d, cstate, np.int64(2), cp.ref_omega, dt, np.bool_(True))
+    r0, dr0, a0 = reference_step(phi_d, cstate, np.int64(0), ref_omega, dt, np.bool_(False))
+    r1, dr1, a1 = reference_step(theta_d, cstate, np.int64(1), ref_omega, dt, np.bool_(False))
+    r2, dr2, a2 = reference_step(psi_d, cstate, np.int64(2), ref_omega, dt, np.bool_(True))
     return r0, dr0, a0, r1, dr1, a1, r2, dr2, a2
 
 
-@jit(inline="always")  # see the note above control_update
+@jit(inline="always")
 def attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
                    cp, cstate, e3, de3, acc3, s3, tau3):
     """Attitude law: Euler-frame torques into ``tau3``, sliding surfaces into ``s3``."""
@@ -247,7 +237,7 @@ def attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0,
             tau3[2] = cp.izz * pid_axis(e3[2], de3[2], a2, cp.pida_kp[2], cp.pida_ki[2], cp.pida_kd[2], integ, np.int64(2), dt, cp.pid_limit)
 
 
-@jit(inline="always")  # see the note above control_update
+@jit(inline="always")
 def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd):
     """Allocation (A6 inverse) of (u1 N, u2..u4 N m about the body axes) to motor thrusts and
     voltages; records what was decided in ``cout``. Returns the flags."""
@@ -260,7 +250,7 @@ def actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, co
     return flags
 
 
-@jit(inline="always")  # see the note above control_update
+@jit(inline="always")
 def record_decision(forces, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cout):
     """Record in ``cout`` what the controller decided: u1..u4 of the motor thrusts ``forces``
     (A6), the attitude references, the sliding surfaces ``s3`` and the flags (shared by the

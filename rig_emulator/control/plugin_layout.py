@@ -30,21 +30,30 @@ body FRD, paper Euler angles; Sec. 4-1 and Eq. 1):
   ``O_N_IMU`` modules present, ``O_CELL_RAW`` (4) load-cell counts: raw samples, only for a
   plug-in that asks for them (else NaN);
 * ``O_RIG`` onwards: the rig's constants (mass, gravity, inertia, arm length, km/kf, kf, N per
-  V, supply voltage, motor thrust limit, tilt limit, reference-filter bandwidth).
+  V, supply voltage, motor thrust limit, tilt limit, reference-filter bandwidth);
+* ``O_REF_ACC_FF``: 1.0 when an offboard acceleration set-point asks for the reference
+  acceleration as a feed-forward (position mode), else 0;
+* ``O_THRUST_CMD`` (4): the motor thrusts (N) the rig commanded at the previous control step,
+  after the allocation's saturation (what the sliding-mode law's rotor gyroscopic term uses).
 
 ``out`` (what the plug-in decides): ``C_CMD`` (4) the command of its declared kind (below);
 ``C_ATT_DES`` (3) and ``C_ATT_RATE_DES`` (3) optionally the attitude it aims at (logs,
-telemetry and the loss-of-control supervisor use it; NaN: not reported).
+telemetry and the loss-of-control supervisor use it; NaN: not reported); ``C_SURFACE`` (3)
+sliding surfaces, ``C_UXY`` (2) the virtual inputs uX, uY of Eq. 34 and ``C_FLAGS`` (the
+allocation's ``SATURATED_*`` / ``TILT_CLAMPED`` bits as a float) for logs and telemetry,
+optionally (NaN: not reported). The loop sets every ``out`` value to NaN before each call.
 
 Command kinds: ``K_VOLTAGES`` four motor voltages (V), ``K_THRUSTS`` four motor thrusts (N),
 ``K_TORQUES`` (u1 N, u2, u3, u4 N m about the body axes FRD; the rig's allocation does the
 rest, A6), ``K_ATTITUDE`` (u1 N, phi_d, theta_d, psi_d rad; the rig's reference filter and
 attitude law do the rest).
 
-Modes (what the plug-in replaces): ``P_NONE`` no plug-in (the built-in strategy),
-``P_BOTH`` both loops, ``P_ATTITUDE`` the attitude loop (the rig's position loop feeds it),
-``P_POSITION`` the position loop (it commands ``K_ATTITUDE``), ``P_EXTERNAL`` no controller
-at all: the motor voltages are set from outside between calls of the loop (lockstep).
+Modes (what the controller replaces): ``P_BOTH`` both loops (the built-in strategies' kernel
+too), ``P_ATTITUDE`` the attitude loop (the built-in position loop feeds it), ``P_POSITION``
+the position loop (it commands ``K_ATTITUDE``), ``P_EXTERNAL`` no controller at all: the motor
+voltages are set from outside between calls of the loop (lockstep). ``P_NONE`` is never flown
+(every run has a controller, the built-in strategies' kernel being one, or takes its motor
+commands from outside).
 """
 
 # obs
@@ -85,13 +94,18 @@ O_F_MAX = 154
 O_MAX_TILT = 155
 O_REF_OMEGA = 156
 O_REF_THRUST = 157  # the offboard collective thrust set-point u1 (N) in attitude/rate modes; NaN: hover (m g) or none
-OBS_SIZE = 160
+O_REF_ACC_FF = 158  # 1.0: an offboard acceleration set-point asks for REF_ACC as a feed-forward (else 0)
+O_THRUST_CMD = 160  # 4: the motor thrusts (N) the rig commanded at the previous control step (after allocation)
+OBS_SIZE = 164
 
 # out
 C_CMD = 0
 C_ATT_DES = 4
 C_ATT_RATE_DES = 7
-OUT_SIZE = 10
+C_SURFACE = 10  # 3: sliding surfaces s = e' + lambda e (logs and telemetry; NaN: none)
+C_UXY = 13  # 2: the virtual inputs uX, uY of Eq. 34 (logs; NaN: none)
+C_FLAGS = 15  # allocation and tilt-clamp flags the controller raised (an integer as a float; NaN: none)
+OUT_SIZE = 16
 
 # command kinds
 K_VOLTAGES = 0

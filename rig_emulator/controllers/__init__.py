@@ -10,7 +10,8 @@ Run it: ``rig-emulator simulate --scenario hover --controller my_module:Hover``,
 ``rig_emulator.api.simulate("hover", controller=Hover())``.
 
 The package holds the interface (this module, :mod:`.base`, :mod:`.observation`, :mod:`.runtime`),
-the built-in strategies' laws (:mod:`.builtin`) and the examples (:mod:`.examples`).
+the built-in strategies (:mod:`.builtin`: one compiled kernel on this interface, which the loop calls
+as it calls a plug-in) and the examples (:mod:`.examples`).
 
 The base classes import without numba; the loader and the observation views (which need the
 compiled side) are imported on first use.

@@ -48,6 +48,11 @@ class Reference:
         return self._mv[PL.O_REF_THRUST]
 
     @property
+    def acceleration_feedforward(self) -> bool:
+        """True when an offboard acceleration set-point asks for ``acceleration`` as a feed-forward."""
+        return self._mv[PL.O_REF_ACC_FF] != 0.0
+
+    @property
     def body_rates(self) -> bool:
         """True for an offboard body-rate set-point: ``attitude_rate`` then holds body rates
         (FRD, rad/s) and ``attitude`` is not controlled."""
@@ -59,7 +64,8 @@ class Observation:
 
     Attributes (numpy views, (3,) unless noted): ``euler``, ``euler_rates``, ``body_rates``
     (estimates: complementary filter; the truth on ideal feedback), ``position``,
-    ``velocity`` (onboard Eq. 1), ``thrusts`` (4, filtered load cells, N), ``reference``
+    ``velocity`` (onboard Eq. 1), ``thrusts`` (4, filtered load cells, N), ``thrust_commands``
+    (4, the motor thrusts commanded at the previous control step, N), ``reference``
     (:class:`Reference`), ``attitude_target``, ``attitude_rate_target``,
     ``attitude_acc_target``, ``thrust_target`` (from the rig's position loop, for an
     attitude-only controller), ``true_position``, ``true_velocity``, ``true_quaternion`` (4),
@@ -84,6 +90,7 @@ class Observation:
         self.position = a[PL.O_POS:PL.O_POS + 3]
         self.velocity = a[PL.O_VEL:PL.O_VEL + 3]
         self.thrusts = a[PL.O_THRUST:PL.O_THRUST + 4]
+        self.thrust_commands = a[PL.O_THRUST_CMD:PL.O_THRUST_CMD + 4]
         self.reference = Reference(a)
         self.attitude_target = a[PL.O_ATT_TARGET:PL.O_ATT_TARGET + 3]
         self.attitude_rate_target = a[PL.O_ATT_RATE_TARGET:PL.O_ATT_RATE_TARGET + 3]
@@ -95,7 +102,8 @@ class Observation:
         self.imu_raw = a[PL.O_IMU_RAW:PL.O_IMU_RAW + 9 * n_imu].reshape(n_imu, 9)
         self.cell_raw = a[PL.O_CELL_RAW:PL.O_CELL_RAW + 4]
         self.inertia = a[PL.O_IXX:PL.O_IXX + 3]
-        for name in ("euler", "euler_rates", "body_rates", "position", "velocity", "thrusts", "attitude_target",
+        for name in ("euler", "euler_rates", "body_rates", "position", "velocity", "thrusts", "thrust_commands",
+                     "attitude_target",
                      "attitude_rate_target", "attitude_acc_target", "true_position", "true_velocity",
                      "true_quaternion", "true_body_rates", "imu_raw", "cell_raw", "inertia"):
             getattr(self, name).flags.writeable = False

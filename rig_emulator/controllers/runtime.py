@@ -86,10 +86,7 @@ class BoundPlugin:
         self.exc: BaseException | None = None  # what a Python plug-in raised
         self.exc_where = ""
         self.observation = None  # a Python plug-in's Observation (PythonCall)
-
-    @property
-    def active(self) -> bool:
-        return self.params.mode != PL.P_NONE
+        self.builtin = False  # the built-in strategy's kernel (bind_builtin)
 
     def failure(self, dt: float) -> PluginError | None:
         """The plug-in's failure recorded by the loop (None: none)."""
@@ -109,11 +106,16 @@ class BoundPlugin:
         return PluginError(self.name, problem, t)
 
     def refresh_rig(self, cp) -> None:
-        """New rig constants (a parameter change of the running rig) into the observation."""
-        if self.controller is not None:
+        """New rig constants (a parameter change of the running rig) into the observation, and the
+        built-in strategy's gains (what it flies, or the loop a plug-in leaves to it)."""
+        if self.controller is not None or self.builtin:
             fill_rig_constants(self.params.obs, cp)
             if self.observation is not None:
                 self.observation.refresh()
+        if self.params.laws.shape[0] > 1:  # (not the lockstep binding, which has no controller)
+            from rig_emulator.controllers.builtin.kernel import pack_params
+
+            pack_params(cp, out=self.params.laws)
 
     def clear(self) -> None:
         """Forget a failure (on arming again)."""
@@ -122,13 +124,39 @@ class BoundPlugin:
         self.exc_where = ""
 
 
-def no_plugin_binding(external: bool = False) -> BoundPlugin:
-    """The loop's arguments without a plug-in (``external``: motor voltages set from outside)."""
-    mode = PL.P_EXTERNAL if external else PL.P_NONE
-    params = PluginParams(mode, 0, 1, False, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(PL.OUT_SIZE),
-                          np.zeros(PL.STATUS_SIZE, dtype=np.int64))
-    # fn None: the loop's plug-in branch is pruned at compile time (not compiled at all)
-    return BoundPlugin(params, None, name="external motor commands" if external else "")
+def no_plugin_binding() -> BoundPlugin:
+    """The loop's arguments without a controller: the motor voltages are set from outside (lockstep)."""
+    params = PluginParams(PL.P_EXTERNAL, 0, 1, False, True, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(PL.OUT_SIZE),
+                          np.zeros(PL.STATUS_SIZE, dtype=np.int64), np.zeros(1), np.zeros(1), np.zeros(PL.OUT_SIZE))
+    # fn None: the loop's controller branch is pruned at compile time (not compiled at all)
+    return BoundPlugin(params, None, name="external motor commands")
+
+
+def bind_builtin(cp, ctrl_div: int, strategy: str) -> BoundPlugin:
+    """The built-in strategy (``control.strategy``) on the plug-in interface: its kernel
+    (:mod:`rig_emulator.controllers.builtin.kernel`) replaces both loops and commands torques at
+    the rig's control rate, as a plug-in declared so would."""
+    from rig_emulator.controllers.builtin.kernel import STATE_SIZE, STRATEGY_POINTER
+
+    obs = np.full(PL.OBS_SIZE, np.nan)
+    obs[PL.O_TRUE_VALID] = 0.0
+    obs[PL.O_N_IMU] = 0
+    fill_rig_constants(obs, cp)
+    laws, rig_state, rig_out = _rig_laws(cp)
+    params = PluginParams(PL.P_BOTH, PL.K_TORQUES, ctrl_div, False, False, obs, laws, np.zeros(STATE_SIZE),
+                          np.full(PL.OUT_SIZE, np.nan), np.zeros(PL.STATUS_SIZE, dtype=np.int64), laws, rig_state,
+                          rig_out)
+    bound = BoundPlugin(params, STRATEGY_POINTER, name=f"built-in {strategy}")
+    bound.builtin = True
+    return bound
+
+
+def _rig_laws(cp) -> tuple:
+    """The built-in strategy's parameters, memory and output for the loop a plug-in does not replace
+    (``PluginParams.laws``, ``rig_state``, ``rig_out``)."""
+    from rig_emulator.controllers.builtin.kernel import STATE_SIZE, pack_params
+
+    return pack_params(cp), np.zeros(STATE_SIZE), np.full(PL.OUT_SIZE, np.nan)
 
 
 def _divisor(name: str, what: str, rate: float, base: float) -> int:
@@ -173,9 +201,9 @@ def bind(controller: Controller, physics_rate_hz: float, control_rate_hz: float,
     fill_rig_constants(obs, cp)
     compiled = isinstance(controller, CompiledController) and not python
     state = np.zeros(max(1, int(getattr(controller, "state_size", 0) or 0)))
-    params = PluginParams(REPLACES[replaces], COMMANDS[commands][0], div, bool(controller.raw_sensors), obs,
+    params = PluginParams(REPLACES[replaces], COMMANDS[commands][0], div, bool(controller.raw_sensors), True, obs,
                           controller.params.array, state, np.full(PL.OUT_SIZE, np.nan),
-                          np.zeros(PL.STATUS_SIZE, dtype=np.int64))
+                          np.zeros(PL.STATUS_SIZE, dtype=np.int64), *_rig_laws(cp))
     bound = BoundPlugin(params, None, controller, name, loop_div)
     bound.fn = _compiled_call(controller, name, params) if compiled else PythonCall(bound, n_imu)
     return bound

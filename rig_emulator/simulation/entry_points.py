@@ -71,6 +71,9 @@ def entry_point(dispatcher, args: tuple):
 
         with split_compile(dispatcher, args, sig):  # cold: a second process compiles part of the loop
             dispatcher.compile(sig)
+            for a in args:  # a function pointer compiled on first use (the built-in strategy's kernel):
+                if hasattr(type(a), "compile_now"):  # now, while the helper may hold it compiled
+                    a.compile_now()
     entry = dispatcher.overloads[sig].entry_point
     if key is not None:
         _ENTRIES[(id(dispatcher), key)] = entry

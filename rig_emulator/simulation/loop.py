@@ -11,12 +11,11 @@ arrays: a headless run calls it once, the MAVLink rig calls it in chunks. After 
 health and loss of control; when its failsafe disarms, the rest of the call runs disarmed
 (the caller reads the latch and keeps the rig disarmed).
 
-A controller plug-in (``pl``, ``pfn``; :mod:`rig_emulator.control.plugin_step`) replaces the
-built-in control update when ``pl.mode`` is not ``P_NONE``; with ``P_EXTERNAL`` no
-controller runs and the motor voltages ``v_cmd`` are whatever the caller set (lockstep).
-Without a plug-in ``pfn`` is None: numba prunes the plug-in branch at compile time, so the
-loop a rig without a plug-in compiles leaves the plug-in path out (a rig with one compiles
-its own specialisation, with it).
+The controller (``pl``, ``pfn``; :mod:`rig_emulator.control.plugin_step`) is called the same
+way whichever it is: the built-in strategy's kernel (:mod:`rig_emulator.controllers.builtin.kernel`),
+a compiled plug-in or a Python one, each through the function pointer ``pfn``. With
+``P_EXTERNAL`` no controller runs and the motor voltages ``v_cmd`` are whatever the caller set
+(lockstep): ``pfn`` is None, and numba prunes the controller branch at compile time.
 
 Reading: the accelerometers' lever-arm term uses the angular acceleration of the
 previous step's first RK4 stage.
@@ -37,9 +36,8 @@ from rig_emulator.control.controller import (
     REF_MODE,
     REF_POS,
     REF_VEL,
-    control_update,
 )
-from rig_emulator.control.plugin_layout import K_VOLTAGES, P_NONE
+from rig_emulator.control.plugin_layout import K_VOLTAGES
 from rig_emulator.control.plugin_step import plugin_control
 from rig_emulator.control.thrust_loop import thrust_loop
 from rig_emulator.estimation.attitude_pipeline import attitude_estimation_step
@@ -137,17 +135,11 @@ def run_steps(
             if armed:
                 guidance_update(t, pos, gp, gstate, reached_t, ref)
                 eq40 = False  # did the motor commands go through the firmware's Eq. 40 inverse?
-                if pl.mode == P_NONE:  # the built-in strategy
-                    control_update(
-                        ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
-                        ref, cp, cstate, cout, v_cmd, scratch[0], scratch[1], scratch[2], scratch[3], scratch[4],
-                    )
-                    eq40 = True
-                elif pfn is not None:  # a controller plug-in; without one (P_EXTERNAL: v_cmd set from outside)
-                    # pfn is None, and numba drops this branch and never compiles the plug-in path
+                if pfn is not None:  # every controller, the built-in strategy's kernel among them; without
+                    # one (P_EXTERNAL: v_cmd set from outside) pfn is None and numba drops this branch
                     if not plugin_control(k, t, dt, ctrl_dt, pos, vel, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz,
                                           ref, pp, cp, cstate, cout, v_cmd, scratch, x, sp, ss, pl, pfn):
-                        armed = False  # the plug-in failed: motors off from the next step (pl.status says why)
+                        armed = False  # the controller failed: motors off from the next step (pl.status says why)
                     else:
                         eq40 = pl.kind != K_VOLTAGES  # a plug-in's voltages bypass it
                 if eq40 and cp.thrust_loop_rate > 0.0 and sp.simulate:  # Sec. 3-3's load-cell thrust loop

@@ -10,16 +10,19 @@ from rig_emulator.control.controller import OUT_ATT_DES
 
 def plugin_binding(cfg: RigConfig, cp, n_imu: int, controller=None, external_motors: bool = False):
     """The :class:`~rig_emulator.controllers.BoundPlugin` of a rig: ``controller`` (a name, class
-    or instance) or else the config's ``controller.plugin``; the config's
+    or instance) or else the config's ``controller.plugin``, or else the built-in strategy
+    (``control.strategy``, :func:`~rig_emulator.controllers.runtime.bind_builtin`); the config's
     ``controller.params`` override its defaults, ``controller.call = "python"`` runs a compiled
     controller's kernel as Python. Raises :class:`~rig_emulator.controllers.PluginError`."""
-    from rig_emulator.controllers import bind, load_controller, no_plugin_binding  # not needed without a plug-in
+    from rig_emulator.controllers import bind, load_controller, no_plugin_binding
+    from rig_emulator.controllers.runtime import bind_builtin
 
     if external_motors:
-        return no_plugin_binding(external=True)
+        return no_plugin_binding()
     spec = controller if controller is not None else (cfg["controller.plugin"] or None)
     if spec is None:
-        return no_plugin_binding()
+        ctrl_div = int(round(cfg["sim.physics_rate_hz"] / cfg["sim.control_rate_hz"]))
+        return bind_builtin(cp, ctrl_div, cfg["control.strategy"])
     ctrl = load_controller(spec, cfg["controller.params"])
     return bind(ctrl, cfg["sim.physics_rate_hz"], cfg["sim.control_rate_hz"], cp, n_imu,
                 python=cfg["controller.call"] == "python")

@@ -52,13 +52,19 @@ def test_jobs_are_the_signatures_the_loop_calls(overrides):
         if wanted <= seen:
             raise _AllSeen
 
-    # the loop's function compiled afresh (not from the cache), its callees from the cache: the hook
-    # sees every call numba types in it
-    fresh = numba.njit(cache=False, **{k: v for k, v in run_steps.targetoptions.items() if k not in ("cache", "nopython")})(
-        run_steps.py_func)
+    def afresh(dispatcher, sig):
+        """``dispatcher`` compiled afresh (not from the cache), its callees from the cache: the hook sees
+        every call numba types in it."""
+        opts = {k: v for k, v in dispatcher.targetoptions.items() if k not in ("cache", "nopython")}
+        numba.njit(cache=False, **opts)(dispatcher.py_func).compile(sig)
+
     previous, _jit._compile_hook = _jit._compile_hook, hook
     try:
-        fresh.compile(signature(run_steps, args))
+        afresh(run_steps, signature(run_steps, args))
+        # a job the loop reaches through another job (the built-in strategy's laws, through the controller's
+        # turn): typed when that job is compiled
+        for d, sig in [(d, sig) for d, sig in jobs if (id(d), compile_helper._key(sig)) in seen]:
+            afresh(d, sig)
     except _AllSeen:
         pass
     finally:

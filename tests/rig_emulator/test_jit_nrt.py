@@ -10,7 +10,8 @@ import pytest
 from rig_emulator.guidance import waypoint_switching
 from rig_emulator._jit import jit
 from rig_emulator.config.loader import load_config
-from rig_emulator.control import allocation, controller, fuzzy, pid, reference_filter, smc, supervisor
+from rig_emulator.control import allocation, controller, fuzzy, pid, plugin_step, reference_filter, smc, supervisor
+from rig_emulator.controllers.builtin import kernel
 from rig_emulator.estimation import (attitude_pipeline, complementary, ensemble, imu_calibration, load_cell_filter,
                                      onboard_position)
 from rig_emulator.guidance import runner, trajectories
@@ -72,16 +73,18 @@ def test_nrt_false_refuses_to_allocate():
 # Every compiled function of the step loop that takes arrays and is not inline="always"
 # (inlined ones are compiled as part of their caller).
 INLINED = (integrator.rk4_step, rigid_body.state_derivative, loop._sense, sensor_step.sensors_step,
-           controller.position_stage, controller.attitude_stage, controller.actuate, controller.record_decision)
+           controller.position_stage, controller.attitude_stage, controller.actuate, controller.record_decision,
+           plugin_step.plugin_control, plugin_step._apply, kernel.strategy_kernel)
 STEP_LOOP = (
     loop.run_steps, loop._log_row,
-    # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step and control_update's stages are
+    # rk4_step, state_derivative, loop._sense, sensor_step.sensors_step and the control stages are
     # inline="always" (a call passed their namedtuples field by field every step or control step,
     # docs/explanation/performance.md)
     integrator.apply_ground, ground.hold_on_ground,
     disturbances.wind_force, disturbances.shock_torque, disturbances.extra_mass_effects,
     rotation.quat_normalize, rotation.quat_to_rot, rotation.quat_derivative,
-    controller.control_update,
+    plugin_step._control, plugin_step._observe, plugin_step._invoke, 
+    kernel.position_laws, kernel.attitude_laws,
     runner.guidance_update, runner._waypoints, runner._start_leg, runner._advance, runner.start_at,
     trajectories.helix_eq46, trajectories.harmonic_attitude, waypoint_switching.line_setpoint,
     imu_module._sample_imu_modules, supervisor.supervise,
@@ -90,7 +93,7 @@ STEP_LOOP = (
     load_cell_filter.load_cell_filter_step, onboard_position.onboard_translation_step, smc.smc_attitude,
     fuzzy.flc_eval, fuzzy.flc_axis, allocation.allocate, pid.pid_axis, complementary.complementary_step,
     ensemble.ensemble_step, ensemble.ensemble_vectors, imu_calibration.apply_imu_calibration,
-    reference_filter.reference_step,
+    reference_filter.reference_step, controller.shape_attitude,
 )
 
 
