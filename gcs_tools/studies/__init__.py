@@ -18,4 +18,10 @@ STUDIES = {
                                          "(needs a PX4 build)"),
     "ardupilot-move": ("ardupilot_move", "ArduCopter SITL flying the rig: hover and a 5 m move per parameter "
                                          "variant (needs an ArduPilot build)"),
+    "served-takeoff": ("served_takeoff", "the served rig armed from its hang into a mission take-off: where the "
+                                         "onboard and the physics vehicle go"),
+    "served-sysid": ("served_sysid", "the identification flight served and logged by a ground station, read by "
+                                     "rig-gcs identify --tlog at each telemetry rate"),
+    "px4-semantics": ("px4_semantics", "PX4's mode, offboard, fence and mission semantics on a served rig: the "
+                                       "figures of the offboard-and-fences guide"),
 }

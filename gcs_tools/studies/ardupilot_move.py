@@ -37,8 +37,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from gcs_tools.studies.page import Page
-from gcs_tools.studies.sitl import StackLink, chosen, free_port, git_commit, span, start_rig, stop, tilt_deg
+from gcs_tools.studies.page import Page, span
+from gcs_tools.studies.sitl import StackLink, chosen, free_port, git_commit, start_rig, stop, tilt_deg
 
 #: the fitted thrust curve (docs/how-to/flight-stacks.md, "ArduCopter's thrust curve fitted to the rig")
 FITTED = {"MOT_SPIN_MIN": 0.19, "MOT_SPIN_MAX": 1.0, "MOT_THST_EXPO": 0.5, "MOT_BAT_VOLT_MAX": 0.0}

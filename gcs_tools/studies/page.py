@@ -38,6 +38,15 @@ def _load() -> str:
     return f"{os.getloadavg()[0]:.1f}" if hasattr(os, "getloadavg") else "?"
 
 
+def span(values: list[float], digits: int) -> str:
+    """``lo-hi`` of ``values`` at ``digits`` decimals (one number where both round alike; ``lo to hi``
+    where ``lo`` is negative, which a hyphen would hide)."""
+    lo, hi = f"{min(values):.{digits}f}", f"{max(values):.{digits}f}"
+    if lo == hi:
+        return lo
+    return f"{lo} to {hi}" if lo.startswith("-") else f"{lo}-{hi}"
+
+
 def command_line(argv: list[str] | None = None) -> str:
     """The study's command as the user typed it (``gcs_tools.studies``' ``main`` puts
     ``python -m gcs_tools.studies NAME`` in ``sys.argv[0]``)."""

@@ -40,8 +40,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from gcs_tools.studies.page import Page
-from gcs_tools.studies.sitl import StackLink, chosen, free_port, git_commit, span, start_rig, stop, tilt_deg, wrap
+from gcs_tools.studies.page import Page, span
+from gcs_tools.studies.sitl import StackLink, chosen, free_port, git_commit, start_rig, stop, tilt_deg, wrap
 
 NAN = float("nan")
 #: the shipped airframe, PX4's name for it, and the geometry-only variant written beside it

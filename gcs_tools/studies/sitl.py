@@ -65,15 +65,6 @@ def tilt_deg(roll: float, pitch: float) -> float:
     return math.degrees(math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch)))))
 
 
-def span(values: list[float], digits: int) -> str:
-    """``lo-hi`` of ``values`` at ``digits`` decimals (one number where both round alike; ``lo to hi``
-    where ``lo`` is negative, which a hyphen would hide)."""
-    lo, hi = f"{min(values):.{digits}f}", f"{max(values):.{digits}f}"
-    if lo == hi:
-        return lo
-    return f"{lo} to {hi}" if lo.startswith("-") else f"{lo}-{hi}"
-
-
 def chosen(text: str, known, option: str, error) -> list[str]:
     """The comma-separated names of ``text``, each one of ``known``; ``error(message)`` (a parser's)
     names ``option`` and the unknown ones otherwise."""

@@ -7,7 +7,8 @@ import pytest
 
 from gcs_tools.studies import ardupilot_move as AP
 from gcs_tools.studies import px4_reposition as PX4
-from gcs_tools.studies.sitl import span, tilt_deg, wrap
+from gcs_tools.studies.page import span
+from gcs_tools.studies.sitl import tilt_deg, wrap
 from rig_emulator.link.px4_simulator.serve_px4 import AIRFRAME_FILE
 
 

@@ -1,15 +1,9 @@
-"""scripts/measure_ground.py: the served take-off docs/explanation/sim-state.md quotes (its page,
+"""python -m gcs_tools.studies served-takeoff: the served take-off docs/explanation/sim-state.md quotes (its page,
 docs/generated/served-takeoff.md). One short served take-off over a real socket, and the page's form."""
-
-import importlib.util
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-_spec = importlib.util.spec_from_file_location("measure_ground", ROOT / "scripts" / "measure_ground.py")
-mg = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(mg)
+from gcs_tools.studies import served_takeoff as mg
 
 
 @pytest.fixture(scope="module")
@@ -28,9 +22,9 @@ def test_the_page_gives_ranges_per_contact_and_vehicle(takeoff):
     other = {k: dict(v, max_m=v["max_m"] + 0.5, left_s=None if k == "physics" else v["left_s"])
              for k, v in takeoff.items()}
     text = mg.markdown({"hold": [takeoff, other], "frictionless": [takeoff]},
-                       "python scripts/measure_ground.py --runs 2 --markdown F", "a machine", 3.0, 0)
+                       "python -m gcs_tools.studies served-takeoff --runs 2 --markdown F", "a machine", 3.0, 0)
     head, table = text.split("\n\n", 1)
-    assert head.startswith("Written by `python scripts/measure_ground.py --runs 2 --markdown F` on a machine")
+    assert head.startswith("Written by `python -m gcs_tools.studies served-takeoff --runs 2 --markdown F` on a machine")
     rows = [r for r in table.splitlines() if r.startswith("| `")]
     assert [r.split("|")[1:3] for r in rows] == [[" `hold` ", " onboard (LOCAL_POSITION_NED) "],
                                                 [" `hold` ", " physics (SIM_STATE) "],

@@ -1,7 +1,7 @@
 """Fly the identification flight on a served rig from a pymavlink ground station that logs it, and identify.
 
-    python scripts/measure_served_sysid.py [--rate-hz 100 500] [--speedup 20 2] [--chunk-ms 1.25 0.5] [--runs N]
-    python scripts/measure_served_sysid.py --runs 3 --markdown docs/generated/served-sysid.md
+    python -m gcs_tools.studies served-sysid [--rate-hz 100 500] [--speedup 20 2] [--chunk-ms 1.25 0.5] [--runs N]
+    python -m gcs_tools.studies served-sysid --runs 3 --markdown docs/generated/served-sysid.md
 
 A ``hilms`` rig with its centre of gravity moved to (-9, 7, 35) mm (the preset says (8, -8, 35) mm) is
 served as ``rig-emulator serve`` in a subprocess. For each ``--rate-hz`` (with the ``--speedup`` and
@@ -23,6 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from gcs_tools.studies.page import span
 from protocol.dialect import mavlink as M
 from rig_emulator.config.loader import load_config
 from rig_emulator.testing.rig import RigProcess, command, connect, recv, stamp_s
@@ -94,11 +95,6 @@ def _verdict(findings: list[dict]) -> str:
     return "flags " + ", ".join(f"{k} ({v:.1f}x)" if v else k for k, v in sorted(worst.items()))
 
 
-def _span(values, fmt: str) -> str:
-    lo, hi = min(values), max(values)
-    return fmt.format(lo) if fmt.format(lo) == fmt.format(hi) else f"{fmt.format(lo)} to {fmt.format(hi)}"
-
-
 def table_rows(results: list[dict]) -> list[str]:
     """The Markdown table of ``results`` against the served rig's values: one row per rate, each figure's
     range over that rate's flights (a served rig's log differs from run to run: which chunk a message
@@ -120,8 +116,8 @@ def table_rows(results: list[dict]) -> list[str]:
         flagged = [_verdict(r["findings"]) for r in rs if r["findings"]]
         check = f"silent on {len(rs) - len(flagged)} of {len(rs)}" + ("; " + "; ".join(flagged) if flagged else "")
         out.append(f"| {rate:g} Hz | {rs[0]['speedup']:g}x, `--chunk-ms {rs[0]['chunk_ms']:g}` | {len(rs)} "
-                   f"| {_span([d['value'] * 1e3 for d in delay], '{:.1f}')} ms | {holds} of {len(rs)} | {gerr:.4f} "
-                   f"| {_span([x['motors.thrust_bias_grf']['value'] for x in e], '{:.1f}')} gr.F | {cerr * 1e3:.2f} mm "
+                   f"| {span([d['value'] * 1e3 for d in delay], 1)} ms | {holds} of {len(rs)} | {gerr:.4f} "
+                   f"| {span([x['motors.thrust_bias_grf']['value'] for x in e], 1)} gr.F | {cerr * 1e3:.2f} mm "
                    f"| {check} |")
     return out
 
@@ -137,14 +133,20 @@ def markdown_page(results: list[dict], command: str, machine: str) -> str:
     return "\n".join([head, ""] + table_rows(results)) + "\n"
 
 
-def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies served-sysid",
+                                 description=__doc__.split("\n\n")[0])
     ap.add_argument("--rate-hz", type=float, nargs="+", default=[100.0, 500.0])
     ap.add_argument("--speedup", type=float, nargs="+", default=[20.0, 2.0])
     ap.add_argument("--chunk-ms", type=float, nargs="+", default=[1.25, 0.5])
     ap.add_argument("--runs", type=int, default=1, help="flights per rate (the table gives each figure's range)")
     ap.add_argument("--markdown", metavar="FILE", help="write the table as a docs page")
+    return ap
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    ap = parser()
     a = ap.parse_args(argv)
     if not len(a.rate_hz) == len(a.speedup) == len(a.chunk_ms):
         ap.error("--rate-hz, --speedup and --chunk-ms take one value per flight")
@@ -155,7 +157,7 @@ def main(argv=None) -> int:
     if a.markdown:
         from gcs_tools.studies.page import command_line, machine
 
-        command = command_line(["python scripts/measure_served_sysid.py", *argv])
+        command = command_line(["python -m gcs_tools.studies served-sysid", *argv])
         Path(a.markdown).write_text(markdown_page(results, command, machine()))
         print(f"wrote {a.markdown}")
     return 0

@@ -1,7 +1,7 @@
 """Arm the served hardware rig from its tilted hang into a mission take-off and watch both positions.
 
-    python scripts/measure_ground.py [--contact hold|frictionless] [--seconds 25] [--seed 0] [--runs N]
-    python scripts/measure_ground.py --runs 4 --markdown docs/generated/served-takeoff.md
+    python -m gcs_tools.studies served-takeoff [--contact hold|frictionless] [--seconds 25] [--seed 0] [--runs N]
+    python -m gcs_tools.studies served-takeoff --runs 4 --markdown docs/generated/served-takeoff.md
 
 A rig (``hilms``, the default plant, hanging at its rest attitude) is served in this process and
 flown over a real socket from pymavlink: a mission of a take-off to 2.5 m and a 20 s hold at home
@@ -22,6 +22,7 @@ import sys
 
 import numpy as np
 
+from gcs_tools.studies.page import span
 from protocol.dialect import mavlink as M
 from protocol.geodesy import global_to_local_ned
 from protocol.mission_items import MissionItem
@@ -90,11 +91,6 @@ def _report(contact: str, r: dict) -> None:
               f"{v['on_ground_max_m']:.3f} m; at the end N {n:+.2f} E {e:+.2f} D {d:+.2f}; left the ground at {left}")
 
 
-def _span(xs, digits: int = 3) -> str:
-    lo, hi = f"{min(xs):.{digits}f}", f"{max(xs):.{digits}f}"
-    return lo if lo == hi else f"{lo}-{hi}"
-
-
 def markdown(results: dict, command: str, machine: str, seconds: float, seed: int) -> str:
     """The page docs/explanation/sim-state.md includes: per ground contact, the ranges over the runs."""
     runs = len(next(iter(results.values())))
@@ -109,23 +105,28 @@ def markdown(results: dict, command: str, machine: str, seconds: float, seed: in
         for name, what in (("onboard", "onboard (LOCAL_POSITION_NED)"), ("physics", "physics (SIM_STATE)")):
             vs = [r[name] for r in rs]
             left = [v["left_s"] for v in vs if v["left_s"] is not None]
-            left_txt = _span(left, 2) if left else "never"
+            left_txt = span(left, 2) if left else "never"
             if len(left) < len(vs) and left:
                 left_txt += f" ({len(vs) - len(left)} never)"
-            lines.append(f"| `{contact}` | {what} | {left_txt} | {_span([v['max_m'] for v in vs])} | "
-                         f"{_span([v['on_ground_max_m'] for v in vs])} | {_span([v['end_m'] for v in vs])} |")
+            lines.append(f"| `{contact}` | {what} | {left_txt} | {span([v['max_m'] for v in vs], 3)} | "
+                         f"{span([v['on_ground_max_m'] for v in vs], 3)} | {span([v['end_m'] for v in vs], 3)} |")
     return "\n".join(lines) + "\n"
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies served-takeoff",
+                                 description=__doc__.split("\n\n")[0])
     ap.add_argument("--contact", choices=("hold", "frictionless"), default="hold", help="sim.ground_contact")
     ap.add_argument("--seconds", type=float, default=25.0, help="simulated seconds recorded after arming")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--runs", type=int, default=1, help="take-offs per ground contact")
     ap.add_argument("--markdown", metavar="FILE",
                     help="fly both ground contacts --runs times each and write the ranges as a documentation page")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
     if not args.markdown:
         for _ in range(args.runs):
             _report(args.contact, fly_once(args.contact, args.seconds, args.seed))
@@ -137,7 +138,7 @@ def main(argv=None) -> int:
     for c, rs in results.items():
         for r in rs:
             _report(c, r)
-    text = markdown(results, command_line(["python scripts/measure_ground.py", *sys.argv[1:]]), machine(),
+    text = markdown(results, command_line(["python -m gcs_tools.studies served-takeoff", *sys.argv[1:]]), machine(),
                     args.seconds, args.seed)
     with open(args.markdown, "w") as f:
         f.write(text)

@@ -1,17 +1,10 @@
-"""scripts/measure_served_sysid.py: the page docs/how-to/identify.md includes (docs/generated/served-sysid.md).
+"""python -m gcs_tools.studies served-sysid: the page docs/how-to/identify.md includes (docs/generated/served-sysid.md).
 Its flights are the served identification flight that tests/rig_emulator/link/commands/test_link_sysid.py flies;
 here the table's form, from made-up results: one row per rate, each figure's range over its flights, the
 interval's hits on the rig's delay counted, the model check's findings named."""
 
-import importlib.util
-from pathlib import Path
-
+from gcs_tools.studies import served_sysid as ms
 from rig_emulator.config.loader import load_config
-
-ROOT = Path(__file__).resolve().parents[2]
-_spec = importlib.util.spec_from_file_location("measure_served_sysid", ROOT / "scripts" / "measure_served_sysid.py")
-ms = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ms)
 
 
 def _result(rate, delay_s, bias, gain_off=0.0, findings=()):
@@ -30,12 +23,12 @@ def test_the_table_gives_each_rates_range_over_its_flights():
     flag = {"channel": "load cell 2", "t_from": 80.0, "t_to": 85.0, "ratio": 10.6, "limit": 8.0}
     results = [_result(100, 0.0134, -53.0, 0.01, [flag]), _result(500, 0.0130, -50.5),
                _result(100, 0.0124, -49.8), _result(500, 0.0129, -50.3, 0.002)]
-    page = ms.markdown_page(results, "python scripts/measure_served_sysid.py --runs 2 --markdown F", "a machine")
+    page = ms.markdown_page(results, "python -m gcs_tools.studies served-sysid --runs 2 --markdown F", "a machine")
     head, table = page.split("\n\n", 1)
-    assert head.startswith("Written by `python scripts/measure_served_sysid.py --runs 2 --markdown F` on a machine")
+    assert head.startswith("Written by `python -m gcs_tools.studies served-sysid --runs 2 --markdown F` on a machine")
     rows = [r.split(" | ") for r in table.splitlines()[2:]]
     assert [r[0] for r in rows] == ["| 100 Hz", "| 500 Hz"] and [r[2] for r in rows] == ["2", "2"]
-    assert rows[0][3] == "12.4 to 13.4 ms" and rows[1][3] == "12.9 to 13.0 ms"
+    assert rows[0][3] == "12.4-13.4 ms" and rows[1][3] == "12.9-13.0 ms"
     assert rows[0][4] == "1 of 2" and rows[1][4] == "2 of 2"  # the rig runs 13 ms: 12.4 +- 0.5 misses it
     assert rows[0][5] == "0.0100" and rows[1][5] == "0.0020"
     assert rows[0][6] == "-53.0 to -49.8 gr.F" and rows[0][7] == "0.20 mm"

@@ -1,6 +1,6 @@
 """The figures of docs/how-to/offboard-and-fences.md, measured on a served rig over real sockets.
 
-    .venv/bin/python scripts/px4_semantics_figures.py [A] [B] [C] [D] [E]   (default: all)
+    python -m gcs_tools.studies px4-semantics [A] [B] [C] [D] [E] [--markdown FILE]   (default: all)
 
 A  holds after a 60 s hover (take-off to 2.5 m, AUTO.LOITER): the jump of POSITION_TARGET_LOCAL_NED
    from the rig's LOCAL_POSITION_NED on DO_SET_MODE POSCTL and on the offboard-loss hold;
@@ -16,13 +16,14 @@ wall clock, so figures vary by a few centimetres between runs.
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
-import sys
 import threading
 
 from pymavlink import mavutil
 
+from gcs_tools.studies.page import Page
 from protocol.dialect import mavlink as M
 from protocol.geodesy import local_enu_to_global
 from protocol.mission_items import MissionItem
@@ -102,13 +103,17 @@ def _close(rig, stop, *conns):
     rig.stop()
 
 
+def _row(out, figure, done, seen):
+    out.print(f"{figure} {done}: {seen}", md=f"| {figure} | {done} | {seen} |")
+
+
 def _offboard(conn, n, e, d):
     """A set-point, then DO_SET_MODE OFFBOARD (PX4's order); the result."""
     _setpoint(conn, n, e, d)
     return _set_mode(conn, "OFFBOARD")
 
 
-def figure_a():
+def figure_a(out):
     for hold in ("POSCTL", "offboard loss"):
         rig, conn, stop = _session()
         _take_off(conn, rig)
@@ -120,29 +125,31 @@ def figure_a():
             _offboard(conn, *here)
             recv_text(conn, lambda t: t.startswith("offboard set-points lost"), timeout=60)
         target, here = _target_and_position(conn)
-        print(f"A {hold} after a 60 s hover: target {_fmt(target)}, rig {_fmt(here)}, "
-              f"jump {math.dist(target, here):.2f} m")
+        what = "DO_SET_MODE POSCTL" if hold == "POSCTL" else "OFFBOARD, then its set-points stop (the offboard-loss hold)"
+        _row(out, "A", f"take-off to 2.5 m, 60 s hover in AUTO.LOITER, then {what}",
+             f"POSITION_TARGET_LOCAL_NED {_fmt(target)}, LOCAL_POSITION_NED {_fmt(here)}: "
+             f"{math.dist(target, here):.2f} m apart")
         _close(rig, stop, conn)
 
 
-def figure_b():
+def figure_b(out):
     rig, conn, stop = _session()
     _take_off(conn, rig)
     _setpoint(conn, 0.0, 0.0, -2.5)
     _wait_sim(conn, 0.5)
-    print(f"B a set-point in AUTO.LOITER: mode then {_mode(conn)}")
+    _row(out, "B", "a SET_POSITION_TARGET_LOCAL_NED in AUTO.LOITER", f"the mode stays {_mode(conn)}")
     _set_mode(conn, "LOITER")
     _wait_sim(conn, 3.0)
     result = _set_mode(conn, "OFFBOARD")
-    print(f"B DO_SET_MODE OFFBOARD 3 s after the last set-point: {M.enums['MAV_RESULT'][result].name}, "
-          f"mode {_mode(conn)}")
+    _row(out, "B", "DO_SET_MODE OFFBOARD 3 s after the last set-point",
+         f"{M.enums['MAV_RESULT'][result].name}, mode {_mode(conn)}")
     _close(rig, stop, conn)
 
 
-def figure_c():
+def figure_c(out):
     rig, conn, stop = _session({"fence.radius": 8.0, "fence.action": "hold"})
     _take_off(conn, rig)
-    print(f"C DO_SET_MODE OFFBOARD with the stream: {M.enums['MAV_RESULT'][_offboard(conn, 20.0, 0.0, -2.5)].name}")
+    entered = M.enums['MAV_RESULT'][_offboard(conn, 20.0, 0.0, -2.5)].name
     far, outside, t_last = 0.0, 0.0, None
     t0 = t_next = _sim_t(conn)
     t = t0
@@ -160,13 +167,15 @@ def figure_c():
             t_next += 0.1
     conn.mav.command_long_send(1, 1, M.MAV_CMD_REQUEST_MESSAGE, 0, M.MAVLINK_MSG_ID_FENCE_STATUS, 0, 0, 0, 0, 0, 0)
     fs = recv(conn, "FENCE_STATUS", 10)
-    print(f"C 40 s of 10 Hz set-points to N 20 m: farthest {far:.1f} m, {outside:.1f} s beyond 8 m, mode "
-          f"{_mode(conn)}, FENCE_STATUS breach_status {fs.breach_status} breach_count {fs.breach_count} "
-          f"breach_type {fs.breach_type}")
+    _row(out, "C", "FENCE_RADIUS 8, FENCE_ACTION hold; a set-point towards N 20 m, DO_SET_MODE OFFBOARD, then "
+                   "set-points towards N 20 m at 10 Hz for 40 s",
+         f"OFFBOARD {entered}; farthest {far:.1f} m from home, {outside:.1f} s beyond 8 m, mode {_mode(conn)}, "
+         f"FENCE_STATUS breach_status {fs.breach_status}, breach_count {fs.breach_count}, "
+         f"breach_type {fs.breach_type}")
     _close(rig, stop, conn)
 
 
-def figure_d():
+def figure_d(out):
     rig, conn, stop = _session()
     home = rig.server.ctx.home
     lat, lon, _ = local_enu_to_global(home, [0.0, 50_000.0, 0.0])
@@ -174,22 +183,52 @@ def figure_d():
                        x=lat, y=lon, z=2.0)
     result = MissionClient(conn).upload([item])
     text = recv_text(conn, lambda t: t.startswith("mission upload"), timeout=10)
-    print(f"D item 50 km north at +2 m: {M.enums['MAV_MISSION_RESULT'][result].name}: {text and text[1]}")
+    _row(out, "D", "a mission of one item 50 km north of home (the tangent plane's point) at +2 m, "
+                   "GLOBAL_RELATIVE_ALT_INT", f"{M.enums['MAV_MISSION_RESULT'][result].name}: `{text and text[1]}`")
     _close(rig, stop, conn)
 
 
-def figure_e():
+def figure_e(out):
     rig, conn, stop = _session()
     other = connect(rig.tcp_url, source_system=254)
     other.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
     recv(other, "HEARTBEAT", 10)
     result = _set_mode(conn, "MANUAL")
     got = recv_text(other, lambda t: "MANUAL" in t, timeout=5)
-    print(f"E MANUAL refused on link 1 ({M.enums['MAV_RESULT'][result].name}): link 2 got {got and got[1]!r}")
+    _row(out, "E", "DO_SET_MODE MANUAL from link 1, a second ground station on link 2",
+         f"link 1: {M.enums['MAV_RESULT'][result].name}; link 2 got the STATUSTEXT `{got and got[1]}`")
     _close(rig, stop, conn, other)
 
 
+FIGURES = {"A": figure_a, "B": figure_b, "C": figure_c, "D": figure_d, "E": figure_e}
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m gcs_tools.studies px4-semantics",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("figures", nargs="*", metavar="FIGURE", type=str.upper,
+                    help="which figures (default: all): A the holds' jump, B a set-point in a hold mode, C the fence "
+                         "against a set-point stream, D a mission item beyond the fence, E a refused mode seen "
+                         "from a second link")
+    ap.add_argument("--markdown", metavar="FILE", help="also write the figures as a documentation page")
+    return ap
+
+
+def main(argv=None) -> int:
+    ap = parser()
+    args = ap.parse_args(argv)
+    unknown = [f for f in args.figures if f not in FIGURES]
+    if unknown:
+        ap.error(f"FIGURE {', '.join(unknown)}: must be among {' '.join(FIGURES)}")
+    out = Page(args.markdown, f"The default plant `hilms` served in the process at {SPEEDUP:g}x real time "
+                              "(SPEEDUP), flown over TCP by pymavlink; every wait is on the rig's own time stamps.")
+    out.page("| | what the ground station did | what the rig did |")
+    out.page("| --- | --- | --- |")
+    for name in args.figures or FIGURES:
+        FIGURES[name](out)
+    out.write()
+    return 0
+
+
 if __name__ == "__main__":
-    figures = {"A": figure_a, "B": figure_b, "C": figure_c, "D": figure_d, "E": figure_e}
-    for name in sys.argv[1:] or figures:
-        figures[name.upper()]()
+    raise SystemExit(main())
