@@ -222,7 +222,7 @@ def main(argv=None) -> int:
         ap.error(f"FIGURE {', '.join(unknown)}: must be among {' '.join(FIGURES)}")
     out = Page(args.markdown, f"The default plant `hilms` served in the process at {SPEEDUP:g}x real time "
                               "(SPEEDUP), flown over TCP by pymavlink; every wait is on the rig's own time stamps.")
-    out.page("| | what the ground station did | what the rig did |")
+    out.page("| figure | what the ground station did | what the rig did |")
     out.page("| --- | --- | --- |")
     for name in args.figures or FIGURES:
         FIGURES[name](out)
