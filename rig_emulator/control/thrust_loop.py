@@ -21,8 +21,8 @@ def thrust_loop(dt, cp, cstate, cout, thrust_meas, cells_flagged, v_cmd):
 
     Where it acts: on the motor voltage commands, after the allocation (A6 inverse) and the
     Eq. 40 inverse of :func:`rig_emulator.control.controller.actuate`, before the actuator chain
-    (delay, quantisation, dead-band); after the built-in control update and after a controller
-    plug-in's whose command went through that Eq. 40 inverse (not one that commands voltages, nor
+    (delay, quantisation, dead-band); after every controller whose command went through that Eq. 40
+    inverse, the built-in strategies' kernel among them (not a plug-in that commands voltages, nor
     an external motor source such as the PX4 lockstep). Fed by what the onboard computer has: the desired thrusts
     ``cout[OUT_THRUST_CMD:+4]`` (N) and the load cells' filtered thrusts ``thrust_meas`` (N; the
     output of the filter ``estimation.load_cell_filter`` selects, the same series Eq. 1's

@@ -243,8 +243,8 @@ def sample_imu_modules(q, omega_B, omega_dot_B, do_inertial, do_mag, k, walk, fa
 
 
 # a call, not inline="always": it has two call sites (the step loop through sensors_step, and
-# sample_imu_modules for the calibration); inlining it together with control_update (13ee116, typing
-# it twice) cost about 12 % of the cold compile for about 0.1 us a step (docs/explanation/performance.md, hardware-rig)
+# sample_imu_modules for the calibration); inlined, it was typed twice, which cost about 12 % of the
+# cold compile for about 0.1 us a step (python -m benchmarks --only hardware-rig)
 @jit(nrt=False)
 def _sample_imu_modules(q, omega_B, omega_dot_B, vib, field_B, do_inertial, do_mag, k, walk, fault_mode,
                         fault_magnitude, rng, raw_out):
