@@ -46,8 +46,11 @@ def test_any_text_is_a_key_or_a_clean_error(text):
     try:
         key = parse_signing_key(text)
     except SigningKeyError as exc:
-        if len(text) >= 4:
-            assert text[4:] not in str(exc) or not text[4:].strip()
+        # the message never shows the key; a key of a few characters can match a few characters of the
+        # message's own words (")" of "text)", once), so only keys of 8 or more characters are looked for
+        secret = text[4:] if text.startswith("hex:") else text
+        if len(secret.strip()) >= 8:
+            assert secret not in str(exc) and secret.strip() not in str(exc)
     else:
         assert len(key) == 32
 
