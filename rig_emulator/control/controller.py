@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from rig_emulator._jit import jit
-from rig_emulator.control.allocation import allocate, euler_torque_to_body
+from rig_emulator.control.allocation import allocate
 from rig_emulator.controllers.builtin.fuzzy import flc_axis
 from rig_emulator.controllers.builtin.pid import pid_axis
 from rig_emulator.control.reference_filter import reference_step, wrap_angle
@@ -88,21 +88,9 @@ def _axis_errors(ref, k, pos, vel):
     return e, de, (0.0 if math.isnan(a) else a)
 
 
-# The stages are inline="always": each is compiled into its caller, the built-in strategy's kernel
-# (controllers/builtin/kernel.py) or the plug-in path (control/plugin_step.py); a call passed cp
-# (ControlParams) and the other arguments field by field at every control step.
-@jit(inline="always")
-def attitude_to_motors(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, u1, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
-                       flags, cp, cstate, cout, v_cmd, e3, de3, acc3, s3, tau3):
-    """Everything after the attitude reference: the attitude law (:func:`attitude_stage`), its
-    Euler-frame torques turned to body torques, then :func:`actuate`: the rig's attitude loop
-    under a plug-in that replaces the position loop only. Returns the flags."""
-    attitude_stage(dt, phi, theta, psi, dphi, dtheta, dpsi, wx, wy, wz, r0, dr0, a0, r1, dr1, a1, r2, dr2, a2,
-                   cp, cstate, e3, de3, acc3, s3, tau3)
-    u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
-    return actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cstate, cout, v_cmd)
-
-
+# The stages are inline="always": each is compiled into its caller, the built-in strategy's laws
+# (controllers/builtin/kernel.py); a call passed cp (ControlParams) and the other arguments field by
+# field at every control step.
 @jit(inline="always")
 def position_stage(dt, pos, vel, phi, theta, psi, ref, cp, cstate, cout):
     """Position law (or, in attitude mode, the guidance's attitude references and u1 = m g).

@@ -86,7 +86,6 @@ class BoundPlugin:
         self.exc: BaseException | None = None  # what a Python plug-in raised
         self.exc_where = ""
         self.observation = None  # a Python plug-in's Observation (PythonCall)
-        self.builtin = False  # the built-in strategy's kernel (bind_builtin)
 
     def failure(self, dt: float) -> PluginError | None:
         """The plug-in's failure recorded by the loop (None: none)."""
@@ -108,14 +107,14 @@ class BoundPlugin:
     def refresh_rig(self, cp) -> None:
         """New rig constants (a parameter change of the running rig) into the observation, and the
         built-in strategy's gains (what it flies, or the loop a plug-in leaves to it)."""
-        if self.controller is not None or self.builtin:
-            fill_rig_constants(self.params.obs, cp)
-            if self.observation is not None:
-                self.observation.refresh()
-        if self.params.laws.shape[0] > 1:  # (not the lockstep binding, which has no controller)
-            from rig_emulator.controllers.builtin.kernel import pack_params
+        if self.fn is None:  # the lockstep binding: no controller
+            return
+        from rig_emulator.controllers.builtin.kernel import pack_params
 
-            pack_params(cp, out=self.params.laws)
+        fill_rig_constants(self.params.obs, cp)
+        if self.observation is not None:
+            self.observation.refresh()
+        pack_params(cp, out=self.params.laws)
 
     def clear(self) -> None:
         """Forget a failure (on arming again)."""
@@ -132,23 +131,26 @@ def no_plugin_binding() -> BoundPlugin:
     return BoundPlugin(params, None, name="external motor commands")
 
 
-def bind_builtin(cp, ctrl_div: int, strategy: str) -> BoundPlugin:
+def bind_builtin(cp, ctrl_div: int, strategy: str, n_imu: int) -> BoundPlugin:
     """The built-in strategy (``control.strategy``) on the plug-in interface: its kernel
     (:mod:`rig_emulator.controllers.builtin.kernel`) replaces both loops and commands torques at
     the rig's control rate, as a plug-in declared so would."""
     from rig_emulator.controllers.builtin.kernel import STATE_SIZE, STRATEGY_POINTER
 
+    laws, rig_state, rig_out = _rig_laws(cp)  # its params are the laws the rig's other loops use
+    params = PluginParams(PL.P_BOTH, PL.K_TORQUES, ctrl_div, False, False, _observation(cp, n_imu), laws,
+                          np.zeros(STATE_SIZE), np.full(PL.OUT_SIZE, np.nan), np.zeros(PL.STATUS_SIZE, dtype=np.int64),
+                          laws, rig_state, rig_out)
+    return BoundPlugin(params, STRATEGY_POINTER, name=f"built-in {strategy}")
+
+
+def _observation(cp, n_imu: int) -> np.ndarray:
+    """A controller's ``obs`` before its first update: the rig's constants, no true state, NaN elsewhere."""
     obs = np.full(PL.OBS_SIZE, np.nan)
     obs[PL.O_TRUE_VALID] = 0.0
-    obs[PL.O_N_IMU] = 0
+    obs[PL.O_N_IMU] = n_imu
     fill_rig_constants(obs, cp)
-    laws, rig_state, rig_out = _rig_laws(cp)
-    params = PluginParams(PL.P_BOTH, PL.K_TORQUES, ctrl_div, False, False, obs, laws, np.zeros(STATE_SIZE),
-                          np.full(PL.OUT_SIZE, np.nan), np.zeros(PL.STATUS_SIZE, dtype=np.int64), laws, rig_state,
-                          rig_out)
-    bound = BoundPlugin(params, STRATEGY_POINTER, name=f"built-in {strategy}")
-    bound.builtin = True
-    return bound
+    return obs
 
 
 def _rig_laws(cp) -> tuple:
@@ -195,10 +197,7 @@ def bind(controller: Controller, physics_rate_hz: float, control_rate_hz: float,
         loop_div = div
     if n_imu > PL.IMU_RAW_MAX:
         raise PluginError(name, f"the rig has {n_imu} IMU modules; plug-ins see at most {PL.IMU_RAW_MAX}")
-    obs = np.full(PL.OBS_SIZE, np.nan)
-    obs[PL.O_TRUE_VALID] = 0.0
-    obs[PL.O_N_IMU] = n_imu
-    fill_rig_constants(obs, cp)
+    obs = _observation(cp, n_imu)
     compiled = isinstance(controller, CompiledController) and not python
     state = np.zeros(max(1, int(getattr(controller, "state_size", 0) or 0)))
     params = PluginParams(REPLACES[replaces], COMMANDS[commands][0], div, bool(controller.raw_sensors), True, obs,

@@ -26,7 +26,7 @@ from rig_emulator._jit import jit
 from rig_emulator.physics import state as S
 from rig_emulator.physics.hardware import motor_thrust, rest_attitude
 from rig_emulator.physics.electrical import SEQUENTIAL_SUM_MAX, supply_current, supply_current_sum
-from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed, thrust_from_voltage
+from rig_emulator.physics.motors import GRAM_FORCE_N, rotor_speed
 from rig_emulator.physics.rotation import euler_from_quat, euler_rates_from_body_rates, quat_from_euler, quat_to_rot
 from rig_emulator.simulation.params import control_params, disturbances, guidance_params, physics_params
 from rig_emulator.simulation.entry_points import BoundEntry

@@ -22,7 +22,7 @@ def plugin_binding(cfg: RigConfig, cp, n_imu: int, controller=None, external_mot
     spec = controller if controller is not None else (cfg["controller.plugin"] or None)
     if spec is None:
         ctrl_div = int(round(cfg["sim.physics_rate_hz"] / cfg["sim.control_rate_hz"]))
-        return bind_builtin(cp, ctrl_div, cfg["control.strategy"])
+        return bind_builtin(cp, ctrl_div, cfg["control.strategy"], n_imu)
     ctrl = load_controller(spec, cfg["controller.params"])
     return bind(ctrl, cfg["sim.physics_rate_hz"], cfg["sim.control_rate_hz"], cp, n_imu,
                 python=cfg["controller.call"] == "python")

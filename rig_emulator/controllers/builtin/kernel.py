@@ -271,17 +271,15 @@ def strategy_cfunc():
     pointer, as it calls a compiled plug-in); compiled, or loaded from the cache, on first use."""
     global _CFUNC
     if _CFUNC is None:
-        from rig_emulator.control.plugin_step import PLUGIN_SIG
-
-        _CFUNC = cfunc(PLUGIN_SIG, cache=True, nopython=True)(_strategy_call)
+        _CFUNC = cfunc(STRATEGY_POINTER.signature(), cache=True, nopython=True)(_strategy_call)
     return _CFUNC
 
 
 class StrategyPointer(WrapperAddressProtocol):
     """The loop's function pointer to :func:`strategy_cfunc`, compiled when its address is first
-    needed: numba types the loop from :meth:`signature` alone, so a cold start compiles the kernel
-    while the step loop compiles (rig_emulator/compile_helper.py gives it to the helper process)
-    instead of before it."""
+    needed: numba types the loop from :meth:`signature` alone, so a cold start compiles the loop
+    first, with the laws the kernel calls in the helper process (rig_emulator/compile_helper.py),
+    and then only the kernel's small C wrapper."""
 
     def __wrapper_address__(self):
         return strategy_cfunc().address

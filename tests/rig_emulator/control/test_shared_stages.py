@@ -1,7 +1,6 @@
 """The built-in strategies' kernel is the rig's stages behind the plug-in interface: from the same
 numbers in ``obs`` it decides, bit for bit, what the position stage and the attitude stage decide
-when called directly with the rig's ControlParams; and attitude_to_motors (the rig's attitude loop
-under a position-only plug-in) is the attitude law, the body torques and the allocation."""
+when called directly with the rig's ControlParams."""
 
 import numpy as np
 import pytest
@@ -9,8 +8,8 @@ import pytest
 from rig_emulator.config.loader import load_config
 from rig_emulator.control import plugin_layout as L
 from rig_emulator.control.allocation import euler_torque_to_body
-from rig_emulator.control.controller import (CS_SIZE, CS_STARTED, OUT_SIZE, OUT_UXY, REF_SIZE, actuate, attitude_stage,
-                                             attitude_to_motors, position_stage)
+from rig_emulator.control.controller import (CS_SIZE, CS_STARTED, OUT_SIZE, OUT_UXY, REF_SIZE, attitude_stage,
+                                             position_stage)
 from rig_emulator.controllers.builtin.kernel import STATE_SIZE, pack_params, strategy_kernel
 from rig_emulator.controllers.runtime import fill_rig_constants
 from rig_emulator.simulation.params import control_params
@@ -80,27 +79,3 @@ def test_a_parameter_change_repacks_the_kernel_params_in_place():
     cp2 = control_params(load_config(scenario="helix", overrides={"control.strategy": "pid", "pid.attitude_kp": [1, 2, 3]}))
     q = pack_params(cp2, out=p)
     assert q is p and np.array_equal(p, pack_params(cp2)) and not np.array_equal(p, pack_params(cp))
-
-
-@pytest.mark.parametrize("strategy", ["smc-flc", "flc", "smc", "pid"])
-def test_attitude_to_motors_is_the_attitude_stage_then_the_allocation(strategy):
-    cp = control_params(load_config(scenario="helix", overrides={"control.strategy": strategy}))
-    rng = np.random.default_rng()
-    dt = 0.002
-    for _ in range(3):
-        pos, vel, att, ref, cstate = _state(rng)
-        b = (cstate.copy(), np.zeros(OUT_SIZE), np.zeros(4), *(np.zeros(3) for _ in range(5)))
-        c = (cstate.copy(), np.zeros(OUT_SIZE), np.zeros(4), *(np.zeros(3) for _ in range(5)))
-        for cs, cout, v_cmd, e3, de3, acc3, s3, tau3 in (b, c):
-            staged = position_stage(dt, pos, vel, *att[:3], ref, cp, cs, cout)
-            u1, refs, flags = staged[0], staged[1:10], staged[10]
-            if cout is b[1]:  # the shared tail
-                attitude_to_motors(dt, *att, u1, *refs, flags, cp, cs, cout, v_cmd, e3, de3, acc3, s3, tau3)
-            else:  # the same, stage by stage
-                r0, dr0, a0, r1, dr1, a1, r2, dr2, a2 = refs
-                attitude_stage(dt, *att, *refs, cp, cs, e3, de3, acc3, s3, tau3)
-                u2, u3, u4 = euler_torque_to_body(tau3[0], tau3[1], tau3[2])
-                actuate(u1, u2, u3, u4, flags, r0, r1, r2, dr0, dr1, dr2, s3, cp, cs, cout, v_cmd)
-        for y, z in zip(b, c):
-            assert np.array_equal(y, z, equal_nan=True)
-        assert np.all(np.isfinite(b[2])) and np.any(b[2] > 0.0)  # it commanded the motors
